@@ -1,0 +1,55 @@
+"""belief: fusing uncertain, conflicting evidence with belief functions (DST and DSmT).
+
+The core objects:
+
+* :class:`Frame`: named hypotheses; :class:`Element`: a member of the hyper-power set D^Θ;
+* :class:`Model`: free DSm, Shafer, hybrid or tracking constraints;
+* :func:`hyper_power_set`: D^Θ enumerated (n ≤ 6 on the free model);
+* :class:`MassFunction`: one mass function; :class:`MassBatch`: N of them as an (N, K) array.
+
+>>> from belief import Frame, MassFunction
+>>> m = MassFunction({"a": 0.6, "a|b": 0.4}, frame=["a", "b"])
+>>> m.bel("a"), m.pls("a")
+(0.6, 1.0)
+"""
+
+from belief.batch import MassBatch
+from belief.errors import (
+    BeliefError,
+    FormatError,
+    FrameError,
+    InvalidMassError,
+    LatticeTooLargeError,
+    ModelError,
+    ParseError,
+    TotalConflictError,
+    UndefinedTransformError,
+    UnknownHypothesisError,
+)
+from belief.frame import Element, Frame
+from belief.lattice import HyperPowerSet, hyper_power_set
+from belief.mass import MassFunction
+from belief.model import Model
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "BeliefError",
+    "Element",
+    "FormatError",
+    "Frame",
+    "FrameError",
+    "HyperPowerSet",
+    "InvalidMassError",
+    "LatticeTooLargeError",
+    "MassBatch",
+    "MassFunction",
+    "Model",
+    "ModelError",
+    "ParseError",
+    "TotalConflictError",
+    "UndefinedTransformError",
+    "UnknownHypothesisError",
+    "hyper_power_set",
+    "__version__",
+]

@@ -1,0 +1,504 @@
+"""Batches of mass functions over one fixed list of focal elements: the numeric engine.
+
+A batch holds N mass functions (one per particle, say) as an ``(N, K)`` float array over
+K focal elements shared by all rows.  Every measure is a product of that array with a
+``(K, Q)`` table that depends only on the model, the focal elements and the queries; the
+tables are compiled once and cached (:func:`measure_plan`), so evaluating thousands of
+rows costs one matrix product and no Python loop per row.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from functools import cached_property, lru_cache
+from typing import TYPE_CHECKING, Union
+
+import numpy as np
+
+from belief.errors import FrameError, InvalidMassError, TotalConflictError, UndefinedTransformError
+from belief.frame import Element, Frame
+from belief.model import Model
+
+if TYPE_CHECKING:
+    from belief.mass import MassFunction
+
+__all__ = ["MassBatch", "measure_plan", "MeasurePlan", "SUM_TOLERANCE", "resolve_model"]
+
+#: Masses must sum to one within this absolute tolerance.
+SUM_TOLERANCE = 1e-9
+
+Query = Union[Element, str]
+
+
+def resolve_model(frame=None, model=None) -> Model:
+    """The model from the ``frame=`` / ``model=`` arguments of the constructors."""
+    if isinstance(model, Model):
+        if frame is not None and _as_frame(frame) != model.frame:
+            raise FrameError("frame= and model= name different frames")
+        return model
+    if frame is None:
+        raise FrameError("give the frame (frame=Frame([...]) or a list of names) or a model")
+    frame = _as_frame(frame)
+    if model is None or model == "free":
+        return Model.free(frame)
+    if model == "shafer":
+        return Model.shafer(frame)
+    if isinstance(model, str):
+        raise FrameError(f"model must be a Model, 'free' or 'shafer', got {model!r}")
+    raise TypeError(f"model must be a Model, got {type(model).__name__}")
+
+
+def _as_frame(frame) -> Frame:
+    if isinstance(frame, Frame):
+        return frame
+    if isinstance(frame, str):
+        return Frame.parse(frame)
+    return Frame(list(frame))
+
+
+# -- compiled tables ---------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class MeasurePlan:
+    """Index tables relating K focal elements to Q queries under a model.
+
+    Each table has shape ``(K, Q)``; they are computed on first use and kept.
+    """
+
+    model: Model
+    focal: tuple[Element, ...]
+    queries: tuple[Element, ...]
+
+    def _table(self, relation) -> np.ndarray:
+        table = np.array(
+            [[relation(x, a) for a in self.queries] for x in self.focal], dtype=np.float64
+        ).reshape(len(self.focal), len(self.queries))
+        table.flags.writeable = False
+        return table
+
+    @cached_property
+    def subset(self) -> np.ndarray:
+        """1 where ∅ ≠ X ⊆ A (belief, W (8))."""
+        return self._table(lambda x, a: bool(x.terms) and x <= a)
+
+    @cached_property
+    def meets(self) -> np.ndarray:
+        """1 where X ∩ A ≠ ∅ under the model (plausibility, W (9))."""
+        model = self.model
+        return self._table(lambda x, a: not model.is_empty(x & a))
+
+    @cached_property
+    def superset(self) -> np.ndarray:
+        """1 where A ⊆ X (commonality)."""
+        return self._table(lambda x, a: a <= x)
+
+    @cached_property
+    def focal_cardinality(self) -> np.ndarray:
+        """DSm cardinality C_M(X) of each focal element, shape (K,)."""
+        return np.array([float(self.model.cardinality(x)) for x in self.focal], dtype=np.float64)
+
+    @cached_property
+    def meet_cardinality(self) -> np.ndarray:
+        """C_M(X ∩ A), shape (K, Q)."""
+        model = self.model
+        return self._table(lambda x, a: float(model.cardinality(x & a)))
+
+    @cached_property
+    def ratio(self) -> np.ndarray:
+        """C_M(X ∩ A) / C_M(X) (0 for X = ∅): the pignistic share of X that falls in A."""
+        card = self.focal_cardinality[:, None]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            table = np.where(card > 0, self.meet_cardinality / np.where(card > 0, card, 1.0), 0.0)
+        table.flags.writeable = False
+        return table
+
+    @cached_property
+    def unit(self) -> np.ndarray:
+        """1 for focal elements of DSm cardinality one (the DSmP anchors), shape (K,)."""
+        return (self.focal_cardinality == 1.0).astype(np.float64)
+
+    @cached_property
+    def unit_in_meet(self) -> np.ndarray:
+        """[C(Z) = 1 and Z ⊆ X ∩ A], shape (K_Z, K_X, Q)."""
+        model = self.model
+        focal, queries = self.focal, self.queries
+        table = np.zeros((len(focal), len(focal), len(queries)))
+        for z, zel in enumerate(focal):
+            if not self.unit[z]:
+                continue
+            for x, xel in enumerate(focal):
+                for a, ael in enumerate(queries):
+                    table[z, x, a] = float(zel <= model.reduce(xel & ael))
+        return table
+
+    @cached_property
+    def unit_in_focal(self) -> np.ndarray:
+        """[C(Z) = 1 and Z ⊆ X], shape (K_Z, K_X)."""
+        focal = self.focal
+        return np.array(
+            [[float(self.unit[z] and zel <= xel) for xel in focal] for z, zel in enumerate(focal)]
+        ).reshape(len(focal), len(focal))
+
+
+@lru_cache(maxsize=1024)
+def measure_plan(model: Model, focal: tuple[Element, ...], queries: tuple[Element, ...]) -> MeasurePlan:
+    """The cached :class:`MeasurePlan` for these focal elements and queries."""
+    return MeasurePlan(model, focal, queries)
+
+
+# -- validation ----------------------------------------------------------------------------------
+def check_masses(values: np.ndarray, focal: Sequence[Element], model: Model, subnormal: bool,
+                 row_names: Sequence[str] | None = None) -> None:
+    """Raise :class:`InvalidMassError` unless every row is a valid mass function.
+
+    ``values`` has shape (N, K).  Masses must be finite and non-negative and sum to one
+    within :data:`SUM_TOLERANCE`; mass on ∅ (or on an element empty under the model)
+    needs ``subnormal=True``.
+    """
+
+    def where(row: int, col: int | None = None) -> str:
+        parts = []
+        if row_names is not None:
+            parts.append(row_names[row])
+        elif values.shape[0] > 1:
+            parts.append(f"row {row}")
+        if col is not None:
+            parts.append(f"on {focal[col]!s}")
+        return " ".join(parts)
+
+    bad = ~np.isfinite(values)
+    if bad.any():
+        r, c = map(int, np.argwhere(bad)[0])
+        raise InvalidMassError(f"mass {values[r, c]!r} {where(r, c)} is not a finite number".replace("  ", " "))
+    negative = values < 0
+    if negative.any():
+        r, c = map(int, np.argwhere(negative)[0])
+        raise InvalidMassError(f"negative mass {values[r, c]!r} {where(r, c)}")
+    totals = _row_sums(values)
+    off = np.abs(totals - 1.0) > SUM_TOLERANCE
+    if off.any():
+        r = int(np.flatnonzero(off)[0])
+        label = where(r)
+        raise InvalidMassError(
+            f"masses {label + ' ' if label else ''}sum to {totals[r]!r}, not 1 (tolerance {SUM_TOLERANCE:g})"
+        )
+    if not subnormal:
+        for col, element in enumerate(focal):
+            if model.is_empty(element):
+                rows = np.flatnonzero(values[:, col] > 0)
+                if rows.size:
+                    what = "the empty set" if element.is_empty else f"{element}, which is empty under the {model.kind} model"
+                    label = where(int(rows[0]))
+                    raise InvalidMassError(
+                        f"mass {values[rows[0], col]!r} {label + ' ' if label else ''}on {what}; "
+                        "pass subnormal=True to allow an unnormalised (open-world) mass function"
+                    )
+
+
+def _row_sums(values: np.ndarray) -> np.ndarray:
+    if values.shape[1] <= 64 and values.shape[0] <= 64:
+        return np.array([math.fsum(row) for row in values.tolist()], dtype=np.float64)
+    return values.sum(axis=1)
+
+
+# -- the batch -----------------------------------------------------------------------------------
+class MassBatch:
+    """N mass functions over one ordered list of K focal elements.
+
+    Parameters
+    ----------
+    focal : sequence of Element or str
+        The focal elements, shared by every row.  Elements are reduced under the model;
+        two columns that become equal are merged.
+    values : array_like, shape (N, K)
+        Row n is the n-th mass function.
+    frame, model :
+        As for :class:`~belief.mass.MassFunction`.
+    subnormal : bool
+        Allow mass on ∅ (open world).
+    validate : bool
+        Check every row (finite, non-negative, sums to one); turn off only for arrays
+        that the library itself produced.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from belief import Frame
+    >>> rows = [[0.5, 0.2, 0.3], [0.1, 0.6, 0.3]]
+    >>> batch = MassBatch(["a", "b", "a|b"], rows, frame=["a", "b"], model="shafer")
+    >>> batch.bel("a")
+    array([0.5, 0.1])
+    >>> batch.pls(["a", "b"])
+    array([[0.8, 0.5],
+           [0.4, 0.9]])
+    >>> batch.betp("a")
+    array([0.65, 0.25])
+    >>> MassBatch(["a", "b", "a|b"], rows, frame=["a", "b"]).pls("a")  # free model: a∩b ≠ ∅
+    array([1., 1.])
+    """
+
+    __slots__ = ("model", "focal", "values", "__weakref__")
+
+    def __init__(self, focal: Iterable[Query], values, frame=None, model=None, *,
+                 subnormal: bool = False, validate: bool = True) -> None:
+        model = resolve_model(frame, model)
+        elements = [model.reduce(model.frame.element(x)) for x in focal]
+        array = np.array(values, dtype=np.float64, copy=True)
+        if array.ndim == 1 and len(elements) == array.size:
+            array = array.reshape(1, -1)
+        if array.ndim != 2 or array.shape[1] != len(elements):
+            raise InvalidMassError(
+                f"values must have shape (N, {len(elements)}) for {len(elements)} focal elements, "
+                f"got {array.shape}"
+            )
+        if len(set(elements)) != len(elements):
+            merged: dict[Element, int] = {}
+            for e in elements:
+                merged.setdefault(e, len(merged))
+            combined = np.zeros((array.shape[0], len(merged)))
+            for col, e in enumerate(elements):
+                combined[:, merged[e]] += array[:, col]
+            elements, array = list(merged), combined
+        if validate:
+            check_masses(array, elements, model, subnormal)
+        array.flags.writeable = False
+        self.model = model
+        self.focal = tuple(elements)
+        self.values = array
+
+    @classmethod
+    def _trusted(cls, model: Model, focal: tuple[Element, ...], values: np.ndarray) -> "MassBatch":
+        obj = object.__new__(cls)
+        values = np.asarray(values, dtype=np.float64)
+        values.flags.writeable = False
+        obj.model, obj.focal, obj.values = model, focal, values
+        return obj
+
+    @classmethod
+    def from_mass_functions(cls, masses: Sequence["MassFunction"]) -> "MassBatch":
+        """Stack mass functions of one model; the focal list is the union of theirs.
+
+        >>> from belief import MassFunction
+        >>> m1 = MassFunction({"a": 1.0}, frame=["a", "b"])
+        >>> m2 = MassFunction({"b": 0.5, "a|b": 0.5}, frame=["a", "b"])
+        >>> MassBatch.from_mass_functions([m1, m2]).values
+        array([[1. , 0. , 0. ],
+               [0. , 0.5, 0.5]])
+        """
+        masses = list(masses)
+        if not masses:
+            raise InvalidMassError("need at least one mass function")
+        model = masses[0].model
+        for m in masses[1:]:
+            if m.model != model:
+                raise FrameError("all mass functions of a batch must share one frame and model")
+        focal = sorted({e for m in masses for e in m.focal}, key=lambda e: e.sort_key)
+        column = {e: i for i, e in enumerate(focal)}
+        values = np.zeros((len(masses), len(focal)))
+        for row, m in enumerate(masses):
+            for e, v in zip(m.focal, m.values.tolist()):
+                values[row, column[e]] = v
+        return cls._trusted(model, tuple(focal), values)
+
+    # -- protocol ----------------------------------------------------------------------------
+    @property
+    def frame(self) -> Frame:
+        return self.model.frame
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.values.shape  # type: ignore[return-value]
+
+    def __len__(self) -> int:
+        return self.values.shape[0]
+
+    def __getitem__(self, index: int) -> "MassFunction":
+        from belief.mass import MassFunction
+
+        row = self.values[index]
+        if row.ndim != 1:
+            raise TypeError("index a batch with one integer; use .values for slices")
+        keep = row > 0
+        return MassFunction._trusted(
+            self.model,
+            tuple(e for e, k in zip(self.focal, keep.tolist()) if k),
+            row[keep],
+        )
+
+    def __iter__(self):
+        for i in range(len(self)):
+            yield self[i]
+
+    def __repr__(self) -> str:
+        return f"<MassBatch of {len(self)} mass functions over {len(self.focal)} focal elements>"
+
+    # -- helpers -------------------------------------------------------------------------------
+    def _plan(self, queries) -> tuple[MeasurePlan, bool]:
+        single = isinstance(queries, (str, Element))
+        if single:
+            queries = [queries]
+        resolved = tuple(self.model.reduce(self.model.frame.element(q)) for q in queries)
+        return measure_plan(self.model, self.focal, resolved), single
+
+    @staticmethod
+    def _shape(result: np.ndarray, single: bool) -> np.ndarray:
+        return result[:, 0] if single else result
+
+    @property
+    def empty_mass(self) -> np.ndarray:
+        """m(∅) of every row, shape (N,)."""
+        cols = [i for i, e in enumerate(self.focal) if not e.terms]
+        if not cols:
+            return np.zeros(len(self))
+        return self.values[:, cols[0]].copy()
+
+    def _normal_values(self, what: str) -> np.ndarray:
+        """Rows with ∅ removed and rescaled by 1 - m(∅) (Dempster normalisation)."""
+        empty = self.empty_mass
+        if not empty.any():
+            return self.values
+        keep = np.array([bool(e.terms) for e in self.focal], dtype=np.float64)
+        scale = (self.values * keep).sum(axis=1)
+        dead = scale <= 0
+        if dead.any():
+            raise TotalConflictError(
+                f"{what} is undefined for a total conflict m(∅) = 1 (row {int(np.flatnonzero(dead)[0])})"
+            )
+        return self.values * keep / scale[:, None]
+
+    # -- measures -----------------------------------------------------------------------------------
+    def bel(self, queries) -> np.ndarray:
+        """Belief Bel(A) = Σ_{∅≠B⊆A} m(B) (W (8)); shape (N,) for one query, (N, Q) for a list."""
+        plan, single = self._plan(queries)
+        return self._shape(self.values @ plan.subset, single)
+
+    def pls(self, queries) -> np.ndarray:
+        """Plausibility Pls(A) = Σ_{B∩A≠∅} m(B) (W (9)); shape (N,) or (N, Q)."""
+        plan, single = self._plan(queries)
+        return self._shape(self.values @ plan.meets, single)
+
+    def q(self, queries) -> np.ndarray:
+        """Commonality q(A) = Σ_{B⊇A} m(B); shape (N,) or (N, Q)."""
+        plan, single = self._plan(queries)
+        return self._shape(self.values @ plan.superset, single)
+
+    commonality = q
+
+    def betp(self, queries) -> np.ndarray:
+        """Generalised pignistic probability BetP(A) = Σ_X m(X) C_M(X∩A)/C_M(X).
+
+        Mass on ∅ is removed first and the rest rescaled by 1 - m(∅).
+        """
+        plan, single = self._plan(queries)
+        return self._shape(self._normal_values("BetP") @ plan.ratio, single)
+
+    def dsmp(self, queries, epsilon: float = 0.001) -> np.ndarray:
+        """DSmP_ε(A), the proportional probabilistic transformation of DSmT.
+
+        DSmP_ε(A) = Σ_X m(X) [Σ_{Z⊆X∩A, C(Z)=1} m(Z) + ε C(X∩A)] / [Σ_{Z⊆X, C(Z)=1} m(Z) + ε C(X)],
+        the sums over focal elements Z of DSm cardinality one (Dezert & Smarandache,
+        "A new probabilistic transformation of belief mass assignment", Fusion 2008).
+        ε = 0 gives DSmP_0 when every focal element holds such a Z.
+        """
+        epsilon = float(epsilon)
+        if not math.isfinite(epsilon) or epsilon < 0:
+            raise UndefinedTransformError(f"DSmP needs a finite ε ≥ 0, got {epsilon!r}")
+        plan, single = self._plan(queries)
+        m = self._normal_values("DSmP")
+        numerator = np.einsum("nz,zxa->nxa", m, plan.unit_in_meet) + epsilon * plan.meet_cardinality[None]
+        denominator = m @ plan.unit_in_focal + epsilon * plan.focal_cardinality[None]
+        live = m > 0
+        if (live & (denominator <= 0)).any():
+            n, x = map(int, np.argwhere(live & (denominator <= 0))[0])
+            raise UndefinedTransformError(
+                f"DSmP with ε = {epsilon:g} is undefined: focal element {self.focal[x]} holds no mass "
+                "of DSm cardinality one; use ε > 0"
+            )
+        safe = np.where(live, denominator, 1.0)
+        shares = np.where(live[:, :, None], numerator / safe[:, :, None], 0.0)
+        return self._shape(np.einsum("nx,nxa->na", m, shares), single)
+
+    def pignistic(self) -> np.ndarray:
+        """BetP of every hypothesis θ_1..θ_n, shape (N, n)."""
+        return self.betp(list(self.frame.singletons))
+
+    # -- operations ----------------------------------------------------------------------------------
+    def _regroup(self, targets: Sequence[Element], scale: np.ndarray | None = None) -> "MassBatch":
+        order = sorted(set(targets), key=lambda e: e.sort_key)
+        column = {e: i for i, e in enumerate(order)}
+        mapping = np.zeros((len(targets), len(order)))
+        for i, t in enumerate(targets):
+            mapping[i, column[t]] = 1.0
+        values = self.values @ mapping
+        return MassBatch._trusted(self.model, tuple(order), values)
+
+    def discount(self, alpha: float) -> "MassBatch":
+        """Shafer discounting with reliability α: m_α(X) = α m(X), m_α(Θ) += 1 - α.
+
+        α = 1 keeps every row, α = 0 makes every row vacuous.
+        """
+        alpha = _check_alpha(alpha)
+        total = self.model.total
+        focal = list(self.focal)
+        values = alpha * self.values
+        if total in focal:
+            col = focal.index(total)
+            values[:, col] += 1.0 - alpha
+        else:
+            focal.append(total)
+            values = np.hstack([values, np.full((len(self), 1), 1.0 - alpha)])
+        order = sorted(range(len(focal)), key=lambda i: focal[i].sort_key)
+        return MassBatch._trusted(self.model, tuple(focal[i] for i in order), values[:, order])
+
+    def condition(self, given: Query, normalized: bool = True) -> "MassBatch":
+        """Dempster conditioning on ``given``: m(C | B) = Σ_{X∩B=C} m(X).
+
+        Unnormalised, the mass of X with X ∩ B = ∅ stays on ∅; normalised, it is removed and
+        the rest rescaled by 1 - m(∅).
+        """
+        given = self.model.reduce(self.model.frame.element(given))
+        targets = [self.model.reduce(x & given) for x in self.focal]
+        result = self._regroup(targets)
+        return result.normalized() if normalized else result
+
+    def normalized(self) -> "MassBatch":
+        """Remove the mass of ∅ and rescale each row by 1 - m(∅)."""
+        values = self._normal_values("normalisation")
+        keep = [i for i, e in enumerate(self.focal) if e.terms]
+        return MassBatch._trusted(self.model, tuple(self.focal[i] for i in keep), values[:, keep])
+
+    def under(self, model: Model) -> "MassBatch":
+        """The same evidence read under a stricter model (dynamic fusion).
+
+        Every focal element is reduced under ``model``; mass of elements that become
+        empty goes to ∅, so the result may be subnormal (see :meth:`normalized`).
+        """
+        check_refines(self.model, model)
+        return MassBatch._trusted(model, self.focal, self.values)._regroup(
+            [model.reduce(x) for x in self.focal])
+
+
+def _check_alpha(alpha: float) -> float:
+    try:
+        value = float(alpha)
+    except (TypeError, ValueError):
+        raise InvalidMassError(f"the reliability α must be a number in [0, 1], got {alpha!r}") from None
+    if not (0.0 <= value <= 1.0):
+        raise InvalidMassError(f"the reliability α must be in [0, 1], got {alpha!r}")
+    return value
+
+
+def check_refines(old: Model, new: Model) -> None:
+    if not isinstance(new, Model):
+        raise TypeError(f"expected a Model, got {type(new).__name__}")
+    if new.frame != old.frame:
+        raise FrameError("the new model must be over the same frame")
+    if not old.is_refined_by(new):
+        allowed = [old.frame.term_name(f) for f in old.forbidden if not new.is_forbidden(f)]
+        from belief.errors import ModelError
+
+        raise ModelError(
+            f"the {new.kind} model is not stricter than the {old.kind} model: it allows "
+            f"{', '.join(allowed)}, which the source model declares empty"
+        )

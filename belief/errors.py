@@ -1,0 +1,62 @@
+"""Exception hierarchy of :mod:`belief`.
+
+Every error that bad input can cause derives from :class:`BeliefError`, so a caller
+(or the command line) can catch the whole family at once.  The concrete classes also
+derive from the closest built-in exception (``ValueError``, ``KeyError``-like cases are
+``ValueError`` here) so that generic ``except ValueError`` code keeps working.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "BeliefError",
+    "FrameError",
+    "UnknownHypothesisError",
+    "ParseError",
+    "ModelError",
+    "InvalidMassError",
+    "LatticeTooLargeError",
+    "TotalConflictError",
+    "FormatError",
+    "UndefinedTransformError",
+]
+
+
+class BeliefError(Exception):
+    """Base class of every error raised by :mod:`belief` on bad input."""
+
+
+class FrameError(BeliefError, ValueError):
+    """A frame of discernment is malformed, or two objects use different frames."""
+
+
+class UnknownHypothesisError(FrameError):
+    """A proposition names a hypothesis that the frame does not have."""
+
+
+class ParseError(BeliefError, ValueError):
+    """A proposition string is not well formed."""
+
+
+class ModelError(BeliefError, ValueError):
+    """A constraint model is malformed, or does not fit the operation asked for."""
+
+
+class InvalidMassError(BeliefError, ValueError):
+    """Masses are not finite, negative, do not sum to one, or sit on an empty element."""
+
+
+class LatticeTooLargeError(BeliefError, ValueError):
+    """Enumerating the hyper-power set (or a graph of it) would not fit in memory or time."""
+
+
+class TotalConflictError(BeliefError, ArithmeticError):
+    """A normalisation divides by a total conflict of one (all mass on the empty set)."""
+
+
+class FormatError(BeliefError, ValueError):
+    """A serialised mass function or model (JSON) is malformed."""
+
+
+class UndefinedTransformError(BeliefError, ArithmeticError):
+    """A transformation is undefined for this input (e.g. DSmP with ε = 0 and no singleton mass)."""

@@ -1,0 +1,481 @@
+"""Frames of discernment and the elements of their hyper-power set.
+
+An element of the hyper-power set D^Θ (SPEC A.1) is stored in *reduced disjunctive
+normal form*: the antichain of its minimal conjunctions.  A conjunction is an integer
+bit mask over the hypotheses (bit ``i`` set means θ_i takes part in the intersection),
+so an element built from a few conjunctions costs a few integers whatever the size of
+the frame, and
+
+* ∩ is the pairwise OR of conjunction masks, then reduction to the minimal ones;
+* ∪ is the union of the two antichains, then reduction;
+* X ⊆ Y holds iff every conjunction of X contains (as a bit set) some conjunction of Y.
+
+The minimal conjunctions of an element are exactly its minimal Venn regions, so the form
+is canonical: two elements are equal iff their antichains are equal.  Elements here are
+read on the *free* DSm model; a :class:`~belief.model.Model` maps them to their
+canonical form under constraints.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable, Iterator, Sequence
+from typing import Union
+
+from belief.errors import FrameError, ParseError, UnknownHypothesisError
+
+__all__ = ["Frame", "Element", "reduce_terms", "term_key"]
+
+_OPERATOR_CHARS = set("()&|∩∪∅,")
+_RESERVED_NAMES = {"empty", "∅"}
+
+
+def term_key(term: int) -> tuple[int, ...]:
+    """Sort key of a conjunction mask: the positions of its hypotheses, compared as words.
+
+    This is the order in which an element prints its conjunctions (``a&b|c``).
+
+    >>> sorted([0b110, 0b100, 0b011], key=term_key)
+    [3, 6, 4]
+    """
+    return tuple(_bits(term))
+
+
+def reduce_terms(terms: Iterable[int]) -> tuple[int, ...]:
+    """Reduce conjunction masks to their canonical antichain.
+
+    A conjunction that contains another one (as a bit set) is absorbed by it,
+    because θ_a ∩ θ_b ⊆ θ_a.  The survivors are returned in :func:`term_key` order.
+
+    Parameters
+    ----------
+    terms : iterable of int
+        Conjunction masks (bit ``i`` = hypothesis ``i``); each must be non-zero.
+
+    Returns
+    -------
+    tuple of int
+        The minimal masks, sorted.
+
+    Examples
+    --------
+    >>> reduce_terms([0b011, 0b001, 0b110])
+    (1, 6)
+    >>> reduce_terms([0b100, 0b011, 0b111])
+    (3, 4)
+    """
+    kept: list[int] = []
+    for term in sorted(set(terms), key=int.bit_count):
+        if not any(k & ~term == 0 for k in kept):
+            kept.append(term)
+    if len(kept) > 1:
+        kept.sort(key=term_key)
+    return tuple(kept)
+
+
+class Frame:
+    """A frame of discernment: an ordered tuple of named hypotheses.
+
+    Parameters
+    ----------
+    hypotheses : sequence of str
+        Distinct names.  A name may not be empty, contain white space or any of
+        ``( ) & | ∩ ∪ ∅ ,``, nor be the reserved word ``empty``.
+
+    Examples
+    --------
+    >>> frame = Frame(["a", "b", "c"])
+    >>> frame.element("c | b & a")
+    Element('a&b|c')
+    >>> frame["a"] & frame["b"]
+    Element('a&b')
+    >>> len(frame)
+    3
+    """
+
+    __slots__ = ("_names", "_index", "_hash")
+
+    def __init__(self, hypotheses: Sequence[str]) -> None:
+        if isinstance(hypotheses, str):
+            raise FrameError(
+                f"a frame takes a sequence of hypothesis names, not the single string {hypotheses!r}; "
+                "use Frame.parse('a,b,c') for a comma-separated list"
+            )
+        names = tuple(hypotheses)
+        if not names:
+            raise FrameError("a frame needs at least one hypothesis")
+        seen: set[str] = set()
+        for name in names:
+            _check_name(name)
+            if name in seen:
+                raise FrameError(f"hypothesis {name!r} appears twice in the frame")
+            seen.add(name)
+        self._names = names
+        self._index = {name: i for i, name in enumerate(names)}
+        self._hash = hash(("belief.Frame", names))
+
+    @classmethod
+    def parse(cls, text: str) -> "Frame":
+        """Build a frame from a comma-separated list of names.
+
+        >>> Frame.parse("t1, t2, FA").hypotheses
+        ('t1', 't2', 'FA')
+        """
+        return cls([part.strip() for part in text.split(",")])
+
+    @classmethod
+    def numbered(cls, n: int, prefix: str = "t") -> "Frame":
+        """The frame ``t1 .. tn``.
+
+        >>> Frame.numbered(3).hypotheses
+        ('t1', 't2', 't3')
+        """
+        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+            raise FrameError(f"the number of hypotheses must be a positive integer, got {n!r}")
+        return cls([f"{prefix}{i}" for i in range(1, n + 1)])
+
+    # -- basic protocol -------------------------------------------------------------
+    @property
+    def hypotheses(self) -> tuple[str, ...]:
+        """The hypothesis names, in frame order."""
+        return self._names
+
+    def __len__(self) -> int:
+        return len(self._names)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._names)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._index
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Frame):
+            return NotImplemented
+        return self is other or self._names == other._names
+
+    def __hash__(self) -> int:
+        return self._hash
+
+    def __repr__(self) -> str:
+        return f"Frame({list(self._names)!r})"
+
+    def index(self, name: str) -> int:
+        """Position of a hypothesis; raises :class:`UnknownHypothesisError`."""
+        try:
+            return self._index[name]
+        except KeyError:
+            raise UnknownHypothesisError(
+                f"unknown hypothesis {name!r}; the frame has {', '.join(self._names)}"
+            ) from None
+
+    def __getitem__(self, name: str) -> "Element":
+        return Element._make(self, (1 << self.index(name),))
+
+    # -- distinguished elements ----------------------------------------------------
+    @property
+    def empty(self) -> "Element":
+        """The empty element ∅."""
+        return Element._make(self, ())
+
+    @property
+    def total(self) -> "Element":
+        """Total ignorance θ_1 ∪ … ∪ θ_n."""
+        return Element._make(self, tuple(1 << i for i in range(len(self._names))))
+
+    @property
+    def singletons(self) -> tuple["Element", ...]:
+        """The elements θ_1, …, θ_n."""
+        return tuple(Element._make(self, (1 << i,)) for i in range(len(self._names)))
+
+    def conjunction(self, names: Iterable[str]) -> "Element":
+        """The intersection of the named hypotheses.
+
+        >>> Frame(["a", "b", "c"]).conjunction(["c", "a"])
+        Element('a&c')
+        """
+        mask = 0
+        for name in names:
+            mask |= 1 << self.index(name)
+        if mask == 0:
+            raise FrameError("a conjunction needs at least one hypothesis")
+        return Element._make(self, (mask,))
+
+    def element(self, value: Union[str, "Element"]) -> "Element":
+        """Coerce a proposition string (or an element of this frame) to an element.
+
+        The grammar: hypothesis names, ``&`` or ``∩`` (intersection, binds tighter),
+        ``|`` or ``∪`` (union), parentheses, and ``empty`` or ``∅``.
+        """
+        if isinstance(value, Element):
+            if value.frame != self:
+                raise FrameError(
+                    f"element {value} belongs to the frame {list(value.frame.hypotheses)}, "
+                    f"not {list(self._names)}"
+                )
+            return value
+        if isinstance(value, str):
+            return _Parser(self, value).parse()
+        raise TypeError(f"expected a proposition string or an Element, got {type(value).__name__}")
+
+    def term_name(self, term: int, style: str = "ascii") -> str:
+        """Name of one conjunction mask, e.g. ``a&b``."""
+        sep = "&" if style == "ascii" else "∩"
+        return sep.join(self._names[i] for i in _bits(term))
+
+    def term(self, text: str) -> int:
+        """Parse a single conjunction (``a&b``) into its mask."""
+        element = self.element(text)
+        if len(element.terms) != 1:
+            raise ParseError(f"{text!r} is not a single conjunction of hypotheses")
+        return element.terms[0]
+
+
+def _check_name(name: object) -> None:
+    if not isinstance(name, str):
+        raise FrameError(f"hypothesis names must be strings, got {name!r}")
+    if not name:
+        raise FrameError("hypothesis names must not be empty")
+    if name in _RESERVED_NAMES:
+        raise FrameError(f"{name!r} is reserved for the empty element and cannot name a hypothesis")
+    bad = sorted({ch for ch in name if ch.isspace() or ch in _OPERATOR_CHARS})
+    if bad:
+        raise FrameError(f"hypothesis name {name!r} contains the reserved character(s) {''.join(bad)!r}")
+
+
+def _bits(mask: int) -> Iterator[int]:
+    while mask:
+        low = mask & -mask
+        yield low.bit_length() - 1
+        mask ^= low
+
+
+class Element:
+    """An element of the hyper-power set D^Θ, in canonical reduced form (SPEC A.1).
+
+    Build elements through a :class:`Frame` (``frame["a"]``, ``frame.element("a&b|c")``)
+    and combine them with ``&`` (∩) and ``|`` (∪).  ``x <= y`` tests inclusion on the free
+    model.  Elements are immutable and hashable; equal elements print equally.
+
+    Attributes
+    ----------
+    frame : Frame
+        The frame the element belongs to.
+    terms : tuple of int
+        The minimal conjunctions, as hypothesis bit masks, in canonical order.
+
+    Examples
+    --------
+    >>> f = Frame(["a", "b", "c"])
+    >>> x = f.element("(a | b) & c")
+    >>> x
+    Element('a&c|b&c')
+    >>> x <= f["c"], f["c"] <= x
+    (True, False)
+    >>> print(x.format("unicode"))
+    a∩c ∪ b∩c
+    """
+
+    __slots__ = ("frame", "terms", "_hash")
+
+    frame: Frame
+    terms: tuple[int, ...]
+
+    def __init__(self, frame: Frame, terms: Iterable[int]) -> None:
+        if not isinstance(frame, Frame):
+            raise TypeError("Element needs a Frame")
+        full = (1 << len(frame)) - 1
+        checked = []
+        for term in terms:
+            if isinstance(term, bool) or not isinstance(term, int) or term <= 0 or term & ~full:
+                raise FrameError(f"{term!r} is not a conjunction mask of a {len(frame)}-hypothesis frame")
+            checked.append(term)
+        object.__setattr__(self, "frame", frame)
+        object.__setattr__(self, "terms", reduce_terms(checked))
+        object.__setattr__(self, "_hash", hash((frame, self.terms)))
+
+    @classmethod
+    def _make(cls, frame: Frame, terms: tuple[int, ...]) -> "Element":
+        """Build from an already reduced, sorted antichain (no checks)."""
+        obj = object.__new__(cls)
+        object.__setattr__(obj, "frame", frame)
+        object.__setattr__(obj, "terms", terms)
+        object.__setattr__(obj, "_hash", hash((frame, terms)))
+        return obj
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError("Element is immutable")
+
+    def __reduce__(self):
+        return (Element, (self.frame, self.terms))
+
+    # -- lattice operations -------------------------------------------------------------
+    def _other(self, other: object) -> "Element":
+        if isinstance(other, str):
+            return self.frame.element(other)
+        if not isinstance(other, Element):
+            raise TypeError(f"cannot combine an Element with {type(other).__name__}")
+        if other.frame != self.frame:
+            raise FrameError("elements of different frames cannot be combined")
+        return other
+
+    def __and__(self, other: Union["Element", str]) -> "Element":
+        other = self._other(other)
+        return Element._make(self.frame, reduce_terms(a | b for a in self.terms for b in other.terms))
+
+    def __or__(self, other: Union["Element", str]) -> "Element":
+        other = self._other(other)
+        return Element._make(self.frame, reduce_terms(self.terms + other.terms))
+
+    __rand__ = __and__
+    __ror__ = __or__
+
+    def __le__(self, other: Union["Element", str]) -> bool:
+        other = self._other(other)
+        return all(any(d & ~c == 0 for d in other.terms) for c in self.terms)
+
+    def __ge__(self, other: Union["Element", str]) -> bool:
+        return self._other(other) <= self
+
+    def __lt__(self, other: Union["Element", str]) -> bool:
+        other = self._other(other)
+        return self != other and self <= other
+
+    def __gt__(self, other: Union["Element", str]) -> bool:
+        return self._other(other) < self
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Element):
+            return NotImplemented
+        return self.terms == other.terms and self.frame == other.frame
+
+    def __hash__(self) -> int:
+        return self._hash
+
+    def __bool__(self) -> bool:
+        return bool(self.terms)
+
+    @property
+    def is_empty(self) -> bool:
+        """True for ∅ (on the free model; see :meth:`Model.is_empty` under constraints)."""
+        return not self.terms
+
+    @property
+    def hypotheses(self) -> int:
+        """Bit mask of the hypotheses that appear in the element."""
+        mask = 0
+        for term in self.terms:
+            mask |= term
+        return mask
+
+    @property
+    def sort_key(self) -> tuple:
+        """Canonical total order of elements (used to order focal elements).
+
+        Fewer conjunctions first; then, term by term, smaller conjunctions first and
+        frame order among equals: ∅, a, b, a&b, a|b, a|b&c, …
+        """
+        return (len(self.terms), tuple((t.bit_count(), term_key(t)) for t in self.terms))
+
+    # -- printing ------------------------------------------------------------------------
+    def format(self, style: str = "ascii") -> str:
+        """Canonical text: a union of intersections.
+
+        Parameters
+        ----------
+        style : {"ascii", "unicode"}
+            ``ascii`` gives ``a&b|c`` and ``empty``; ``unicode`` gives ``a∩b ∪ c`` and ``∅``.
+        """
+        if style not in ("ascii", "unicode"):
+            raise ValueError(f"style must be 'ascii' or 'unicode', got {style!r}")
+        if not self.terms:
+            return "empty" if style == "ascii" else "∅"
+        joiner = "|" if style == "ascii" else " ∪ "
+        return joiner.join(self.frame.term_name(t, style) for t in self.terms)
+
+    def __str__(self) -> str:
+        return self.format("ascii")
+
+    def __repr__(self) -> str:
+        return f"Element({self.format('ascii')!r})"
+
+
+# -- parsing -----------------------------------------------------------------------------
+_TOKEN = re.compile(r"\s*(?:(?P<op>[()&|∩∪∅])|(?P<name>[^\s()&|∩∪∅]+))")
+
+
+class _Parser:
+    """Recursive-descent parser: union := inter ('|' inter)*; inter := atom ('&' atom)*."""
+
+    def __init__(self, frame: Frame, text: str) -> None:
+        self.frame = frame
+        self.text = text
+        self.tokens: list[tuple[str, str, int]] = []
+        pos = 0
+        stripped_end = len(text.rstrip())
+        while pos < stripped_end:
+            match = _TOKEN.match(text, pos)
+            if match is None:  # pragma: no cover - the pattern matches any non-space
+                self._fail("unexpected character", pos)
+            if match.group("op"):
+                op = match.group("op")
+                kind = {"∩": "&", "∪": "|", "∅": "empty"}.get(op, op)
+                self.tokens.append((kind, op, match.start("op")))
+            else:
+                name = match.group("name")
+                kind = "empty" if name == "empty" else "name"
+                self.tokens.append((kind, name, match.start("name")))
+            pos = match.end()
+        self.tokens.append(("end", "", len(text)))
+        self.pos = 0
+
+    def _fail(self, message: str, where: int) -> None:
+        raise ParseError(f"malformed proposition {self.text!r}: {message} at position {where}")
+
+    def parse(self) -> Element:
+        if len(self.tokens) == 1:
+            raise ParseError("empty proposition string; write 'empty' for the empty element")
+        result = self._union()
+        kind, value, where = self.tokens[self.pos]
+        if kind != "end":
+            self._fail(f"unexpected {value!r}", where)
+        return result
+
+    def _union(self) -> Element:
+        result = self._inter()
+        while self.tokens[self.pos][0] == "|":
+            self.pos += 1
+            result = result | self._inter()
+        return result
+
+    def _inter(self) -> Element:
+        result = self._atom()
+        while self.tokens[self.pos][0] == "&":
+            self.pos += 1
+            result = result & self._atom()
+        return result
+
+    def _atom(self) -> Element:
+        kind, value, where = self.tokens[self.pos]
+        if kind == "(":
+            self.pos += 1
+            result = self._union()
+            if self.tokens[self.pos][0] != ")":
+                self._fail("missing ')'", self.tokens[self.pos][2])
+            self.pos += 1
+            return result
+        if kind == "name":
+            self.pos += 1
+            if value not in self.frame:
+                raise UnknownHypothesisError(
+                    f"unknown hypothesis {value!r} in {self.text!r}; "
+                    f"the frame has {', '.join(self.frame.hypotheses)}"
+                )
+            return self.frame[value]
+        if kind == "empty":
+            self.pos += 1
+            return self.frame.empty
+        if kind == "end":
+            self._fail("unexpected end, expected a hypothesis or '('", where)
+        self._fail(f"unexpected {value!r}, expected a hypothesis or '('", where)
+        raise AssertionError  # pragma: no cover

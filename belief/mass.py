@@ -1,0 +1,373 @@
+"""Mass functions (basic belief assignments): the friendly face of :class:`MassBatch`.
+
+A :class:`MassFunction` is an immutable value: a model, a canonical tuple of focal
+elements and their masses.  Equality is exact; :meth:`MassFunction.isclose` compares
+with a tolerance.  Every measure is computed by the batch engine on a single row.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterator, Mapping
+from typing import Any, Union
+
+import numpy as np
+
+from belief.batch import MassBatch, check_masses, resolve_model
+from belief.errors import FormatError, InvalidMassError
+from belief.frame import Element, Frame
+from belief.model import Model
+
+__all__ = ["MassFunction"]
+
+Query = Union[Element, str]
+
+
+class MassFunction(Mapping):
+    """A mass function m: D^Θ → [0, 1] with Σ m = 1 (W (1)).
+
+    Parameters
+    ----------
+    masses : mapping of proposition (str or Element) to float
+        Zero masses are dropped; propositions that denote the same element (``"a|b"``
+        and ``"b|a"``) have their masses added.
+    frame : Frame or sequence of str, optional
+        The frame; may be omitted when ``model`` is a :class:`~belief.model.Model`.
+    model : Model or {"free", "shafer"}, optional
+        The model the evidence was elicited under; the free DSm model by default.
+    subnormal : bool
+        Allow mass on ∅ or on elements that are empty under the model (open world, as
+        in the transferable belief model); such mass is kept on ∅.
+
+    Raises
+    ------
+    InvalidMassError
+        Non-finite or negative masses, a sum other than one (within 1e-9), or mass on
+        an empty element without ``subnormal=True``.
+
+    Examples
+    --------
+    >>> m = MassFunction({"a": 0.6, "a|b": 0.4}, frame=["a", "b"])
+    >>> m
+    MassFunction({'a': 0.6, 'a|b': 0.4}, frame=['a', 'b'])
+    >>> m.bel("a"), m.pls("b"), m.q("a")  # on the free model a∩b ≠ ∅, so Pls(b) = 1
+    (0.6, 1.0, 1.0)
+    >>> m.betp("a")  # a|b has 3 regions on the free model, a&b counts for a and for b
+    0.8666666666666667
+    >>> m.under(Model.shafer(m.frame)).betp("a")
+    0.8
+    """
+
+    __slots__ = ("model", "focal", "values", "_batch", "_hash")
+
+    model: Model
+    focal: tuple[Element, ...]
+    values: np.ndarray
+
+    def __init__(self, masses: Mapping[Query, float], frame=None, model=None, *,
+                 subnormal: bool = False) -> None:
+        if not isinstance(masses, Mapping):
+            raise InvalidMassError(f"masses must be a mapping of propositions to numbers, got {type(masses).__name__}")
+        model = resolve_model(frame, model)
+        merged: dict[Element, list[float]] = {}
+        for key, value in masses.items():
+            element = model.frame.element(key)
+            if model.is_empty(element):
+                element = model.frame.empty
+            else:
+                element = model.reduce(element)
+            merged.setdefault(element, []).append(_as_mass(value, key))
+        items = sorted(((e, math.fsum(v)) for e, v in merged.items()), key=lambda ev: ev[0].sort_key)
+        if not items:
+            raise InvalidMassError("a mass function needs at least one focal element")
+        focal = tuple(e for e, _ in items)
+        values = np.array([v for _, v in items], dtype=np.float64)
+        check_masses(values.reshape(1, -1), focal, model, subnormal)
+        keep = values > 0
+        self._init(model, tuple(e for e, k in zip(focal, keep.tolist()) if k), values[keep])
+
+    def _init(self, model: Model, focal: tuple[Element, ...], values: np.ndarray) -> None:
+        values = np.array(values, dtype=np.float64)
+        values.flags.writeable = False
+        object.__setattr__(self, "model", model)
+        object.__setattr__(self, "focal", focal)
+        object.__setattr__(self, "values", values)
+        object.__setattr__(self, "_batch", None)
+        object.__setattr__(self, "_hash", None)
+
+    @classmethod
+    def _trusted(cls, model: Model, focal: tuple[Element, ...], values) -> "MassFunction":
+        obj = object.__new__(cls)
+        obj._init(model, focal, values)
+        return obj
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError("MassFunction is immutable")
+
+    def __reduce__(self):
+        return (MassFunction._trusted, (self.model, self.focal, self.values.copy()))
+
+    # -- constructors ---------------------------------------------------------------------
+    @classmethod
+    def vacuous(cls, frame=None, model=None) -> "MassFunction":
+        """Total ignorance: m(θ_1 ∪ … ∪ θ_n) = 1.
+
+        >>> MassFunction.vacuous(frame=["a", "b"])
+        MassFunction({'a|b': 1.0}, frame=['a', 'b'])
+        """
+        model = resolve_model(frame, model)
+        return cls._trusted(model, (model.total,), [1.0])
+
+    @classmethod
+    def categorical(cls, element: Query, frame=None, model=None) -> "MassFunction":
+        """All the mass on one element.
+
+        >>> MassFunction.categorical("a&b", frame=["a", "b"])
+        MassFunction({'a&b': 1.0}, frame=['a', 'b'])
+        """
+        model = resolve_model(frame, model)
+        target = model.frame.element(element)
+        if model.is_empty(target):
+            raise InvalidMassError(f"{target} is empty under the {model.kind} model and cannot hold all the mass")
+        return cls._trusted(model, (model.reduce(target),), [1.0])
+
+    # -- mapping protocol ----------------------------------------------------------------
+    @property
+    def frame(self) -> Frame:
+        return self.model.frame
+
+    def __getitem__(self, key: Query) -> float:
+        element = self.model.frame.element(key)
+        element = self.model.frame.empty if self.model.is_empty(element) else self.model.reduce(element)
+        for e, v in zip(self.focal, self.values.tolist()):
+            if e == element:
+                return v
+        return 0.0
+
+    mass = __getitem__
+
+    def __iter__(self) -> Iterator[Element]:
+        return iter(self.focal)
+
+    def __len__(self) -> int:
+        return len(self.focal)
+
+    def __contains__(self, key: object) -> bool:
+        if not isinstance(key, (str, Element)):
+            return False
+        return self[key] > 0
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, MassFunction):
+            return NotImplemented
+        return (self.model == other.model and self.focal == other.focal
+                and bool(np.array_equal(self.values, other.values)))
+
+    def __ne__(self, other: object) -> bool:
+        result = self.__eq__(other)
+        return result if result is NotImplemented else not result
+
+    def __hash__(self) -> int:
+        if self._hash is None:
+            object.__setattr__(self, "_hash", hash((self.model, self.focal, self.values.tobytes())))
+        return self._hash  # type: ignore[return-value]
+
+    def isclose(self, other: "MassFunction", *, rel_tol: float = 1e-9, abs_tol: float = 1e-12) -> bool:
+        """Equal up to floating-point tolerance (a focal element missing on one side counts as 0).
+
+        >>> a = MassFunction({"a": 0.1 + 0.2, "b": 0.7}, frame=["a", "b"])
+        >>> b = MassFunction({"a": 0.3, "b": 0.7}, frame=["a", "b"])
+        >>> a == b, a.isclose(b)
+        (False, True)
+        """
+        if not isinstance(other, MassFunction):
+            raise TypeError("isclose compares two mass functions")
+        if self.model != other.model:
+            return False
+        mine = dict(zip(self.focal, self.values.tolist()))
+        theirs = dict(zip(other.focal, other.values.tolist()))
+        return all(
+            math.isclose(mine.get(e, 0.0), theirs.get(e, 0.0), rel_tol=rel_tol, abs_tol=abs_tol)
+            for e in set(mine) | set(theirs)
+        )
+
+    def items(self):  # type: ignore[override]
+        """(element, mass) pairs in canonical order."""
+        return list(zip(self.focal, self.values.tolist()))
+
+    def to_mapping(self) -> dict[str, float]:
+        """``{proposition string: mass}`` in canonical order."""
+        return {str(e): v for e, v in zip(self.focal, self.values.tolist())}
+
+    def __repr__(self) -> str:
+        body = ", ".join(f"{str(e)!r}: {v!r}" for e, v in zip(self.focal, self.values.tolist()))
+        where = (f"frame={list(self.frame.hypotheses)!r}" if self.model.kind == "free" and not self.model.forbidden
+                 else f"model={self.model!r}")
+        return f"MassFunction({{{body}}}, {where})"
+
+    @property
+    def empty_mass(self) -> float:
+        """m(∅): the conflict an unnormalised result keeps."""
+        return self[self.frame.empty]
+
+    @property
+    def is_subnormal(self) -> bool:
+        return self.empty_mass > 0
+
+    # -- the engine --------------------------------------------------------------------------
+    def batch(self) -> MassBatch:
+        """This mass function as a one-row :class:`MassBatch`."""
+        if self._batch is None:
+            object.__setattr__(self, "_batch", MassBatch._trusted(self.model, self.focal, self.values.reshape(1, -1)))
+        return self._batch  # type: ignore[return-value]
+
+    def _one(self, method: str, query, **kwargs):
+        result = getattr(self.batch(), method)(query, **kwargs)[0]
+        if isinstance(query, (str, Element)):
+            return float(result)
+        return result
+
+    def bel(self, query: Query) -> float:
+        """Belief Bel(A) = Σ_{∅≠B⊆A} m(B) (W (8)).  A list of queries gives an array."""
+        return self._one("bel", query)
+
+    def pls(self, query: Query) -> float:
+        """Plausibility Pls(A) = Σ_{B∩A≠∅} m(B) (W (9)).  A list of queries gives an array."""
+        return self._one("pls", query)
+
+    def q(self, query: Query) -> float:
+        """Commonality q(A) = Σ_{B⊇A} m(B).  A list of queries gives an array."""
+        return self._one("q", query)
+
+    commonality = q
+    belief = bel
+    plausibility = pls
+
+    def cardinality(self, element: Query) -> int:
+        """DSm cardinality C_M(A) under this mass function's model."""
+        return self.model.cardinality(element)
+
+    def betp(self, query: Query) -> float:
+        """Generalised pignistic probability BetP(A) = Σ_X m(X) C_M(X∩A)/C_M(X).
+
+        m(∅) is removed and the rest rescaled by 1 - m(∅).
+        """
+        return self._one("betp", query)
+
+    def dsmp(self, query: Query, epsilon: float = 0.001) -> float:
+        """DSmP_ε(A), the proportional transformation of DSmT (see :meth:`MassBatch.dsmp`).
+
+        >>> m = MassFunction({"a": 0.4, "b": 0.2, "a|b": 0.4}, model=Model.shafer(Frame(["a", "b"])))
+        >>> round(m.dsmp("a", epsilon=0), 12)
+        0.666666666667
+        """
+        return self._one("dsmp", query, epsilon=epsilon)
+
+    def pignistic(self) -> dict[str, float]:
+        """BetP of every hypothesis, ``{name: probability}``."""
+        values = self.batch().pignistic()[0]
+        return dict(zip(self.frame.hypotheses, values.tolist()))
+
+    def dsmp_probabilities(self, epsilon: float = 0.001) -> dict[str, float]:
+        """DSmP_ε of every hypothesis, ``{name: probability}``."""
+        values = self.batch().dsmp(list(self.frame.singletons), epsilon=epsilon)[0]
+        return dict(zip(self.frame.hypotheses, values.tolist()))
+
+    # -- operations ------------------------------------------------------------------------------
+    @staticmethod
+    def _from_row(batch: MassBatch) -> "MassFunction":
+        return batch[0]
+
+    def discount(self, alpha: float) -> "MassFunction":
+        """Shafer discounting with reliability α ∈ [0, 1].
+
+        m_α(X) = α m(X) for X ≠ Θ and m_α(Θ) = α m(Θ) + 1 - α.  α = 1 keeps the source,
+        α = 0 makes it vacuous.
+
+        >>> MassFunction({"a": 0.6, "b": 0.4}, frame=["a", "b"]).discount(0.5)
+        MassFunction({'a': 0.3, 'b': 0.2, 'a|b': 0.5}, frame=['a', 'b'])
+        """
+        return self._from_row(self.batch().discount(alpha))
+
+    def condition(self, given: Query, normalized: bool = True) -> "MassFunction":
+        """Dempster conditioning on ``given`` (combination with the categorical m(B) = 1).
+
+        >>> m = MassFunction({"a": 0.5, "b": 0.3, "a|b": 0.2}, model="shafer", frame=["a", "b"])
+        >>> m.condition("a")
+        MassFunction({'a': 1.0}, model=Model.shafer(Frame(['a', 'b'])))
+        >>> m.condition("a", normalized=False)
+        MassFunction({'empty': 0.3, 'a': 0.7}, model=Model.shafer(Frame(['a', 'b'])))
+        """
+        return self._from_row(self.batch().condition(given, normalized=normalized))
+
+    def normalized(self) -> "MassFunction":
+        """Remove m(∅) and rescale by 1 - m(∅); raises TotalConflictError if m(∅) = 1."""
+        return self._from_row(self.batch().normalized())
+
+    def under(self, model: Model) -> "MassFunction":
+        """Read the same evidence under a stricter model (dynamic fusion).
+
+        Focal elements are reduced under ``model``; the mass of those that become empty
+        moves to ∅, so the result may be subnormal.
+
+        >>> m = MassFunction({"a&b": 0.3, "a": 0.7}, frame=["a", "b"])
+        >>> m.under(Model.shafer(m.frame))
+        MassFunction({'empty': 0.3, 'a': 0.7}, model=Model.shafer(Frame(['a', 'b'])))
+        """
+        return self._from_row(self.batch().under(model))
+
+    # -- serialisation ------------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """The BBA file object: ``{"frame", "model", "mass"[, "subnormal"]}``."""
+        data: dict[str, Any] = {
+            "frame": list(self.frame.hypotheses),
+            "model": self.model.to_dict(),
+            "mass": self.to_mapping(),
+        }
+        if self.is_subnormal:
+            data["subnormal"] = True
+        return data
+
+    def to_json(self, indent: int | None = 2) -> str:
+        """JSON text of :meth:`to_dict`; floats are written exactly (round trip is exact)."""
+        return json.dumps(self.to_dict(), indent=indent, ensure_ascii=False)
+
+    @classmethod
+    def from_dict(cls, data: Any) -> "MassFunction":
+        """Inverse of :meth:`to_dict`; raises :class:`FormatError` naming what is wrong."""
+        if not isinstance(data, Mapping):
+            raise FormatError("a BBA must be a JSON object with \"frame\" and \"mass\"")
+        unknown = set(data) - {"frame", "model", "mass", "subnormal"}
+        if unknown:
+            raise FormatError(f"unknown key(s) in BBA: {', '.join(sorted(map(str, unknown)))}")
+        for key in ("frame", "mass"):
+            if key not in data:
+                raise FormatError(f"the BBA has no \"{key}\"")
+        names = data["frame"]
+        if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+            raise FormatError("\"frame\" must be a list of hypothesis names")
+        frame = Frame(names)
+        model = Model.from_dict(frame, data.get("model"))
+        masses = data["mass"]
+        if not isinstance(masses, Mapping):
+            raise FormatError("\"mass\" must be an object mapping propositions to numbers")
+        subnormal = data.get("subnormal", False)
+        if not isinstance(subnormal, bool):
+            raise FormatError("\"subnormal\" must be true or false")
+        return cls(masses, model=model, subnormal=subnormal)
+
+    @classmethod
+    def from_json(cls, text: Union[str, bytes]) -> "MassFunction":
+        """Parse a BBA file's text."""
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise FormatError(f"not valid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}") from None
+        return cls.from_dict(data)
+
+
+def _as_mass(value: Any, key: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InvalidMassError(f"the mass of {key!s} must be a number, got {value!r}")
+    return float(value)
