@@ -362,9 +362,8 @@ class MassBatch:
         scale = (self.values * keep).sum(axis=1)
         dead = scale <= 0
         if dead.any():
-            raise TotalConflictError(
-                f"{what} is undefined for a total conflict m(∅) = 1 (row {int(np.flatnonzero(dead)[0])})"
-            )
+            where = f" (row {int(np.flatnonzero(dead)[0])})" if len(self) > 1 else ""
+            raise TotalConflictError(f"{what} is undefined: total conflict, m(∅) = 1{where}")
         return self.values * keep / scale[:, None]
 
     # -- measures -----------------------------------------------------------------------------------
@@ -457,16 +456,21 @@ class MassBatch:
         Unnormalised, the mass of X with X ∩ B = ∅ stays on ∅; normalised, it is removed and
         the rest rescaled by 1 - m(∅).
         """
-        given = self.model.reduce(self.model.frame.element(given))
+        named = self.model.frame.element(given)
+        given = self.model.reduce(named)
         targets = [self.model.reduce(x & given) for x in self.focal]
         result = self._regroup(targets)
-        return result.normalized() if normalized else result
+        if not normalized:
+            return result
+        return MassBatch._trusted(result.model, result.focal, result._normal_values(f"conditioning on {named}"))._drop_empty()
+
+    def _drop_empty(self) -> "MassBatch":
+        keep = [i for i, e in enumerate(self.focal) if e.terms]
+        return MassBatch._trusted(self.model, tuple(self.focal[i] for i in keep), self.values[:, keep])
 
     def normalized(self) -> "MassBatch":
         """Remove the mass of ∅ and rescale each row by 1 - m(∅)."""
-        values = self._normal_values("normalisation")
-        keep = [i for i, e in enumerate(self.focal) if e.terms]
-        return MassBatch._trusted(self.model, tuple(self.focal[i] for i in keep), values[:, keep])
+        return MassBatch._trusted(self.model, self.focal, self._normal_values("normalisation"))._drop_empty()
 
     def under(self, model: Model) -> "MassBatch":
         """The same evidence read under a stricter model (dynamic fusion).

@@ -1,0 +1,263 @@
+"""The ``belief`` command line.
+
+Subcommands: ``lattice``, ``measures``, ``transform`` and ``demo``.  Plugins add their own
+through the entry-point group ``belief.commands``: each entry point is a callable
+``register(subparsers)`` that adds parsers to the sub-parser collection, and sets a
+``func(args) -> int`` default on each.  The core never imports a plugin by name.
+
+Bad input (an unknown hypothesis, masses that do not sum to one, a malformed file …)
+ends with one line on standard error naming the problem and exit status 1; a wrong
+command line ends with one line and status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from importlib.metadata import entry_points
+from pathlib import Path
+from typing import Any
+
+from belief.errors import BeliefError, FormatError
+from belief.frame import Frame
+from belief.lattice import hyper_power_set
+from belief.mass import MassFunction
+from belief.model import Model
+
+__all__ = ["main", "build_parser", "ENTRY_POINT_GROUP"]
+
+ENTRY_POINT_GROUP = "belief.commands"
+
+
+class CommandError(Exception):
+    """A problem with the command line itself (exit status 2)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, no usage block
+        raise CommandError(f"{self.prog}: error: {message} (see '{self.prog} --help')")
+
+
+# -- helpers ------------------------------------------------------------------------------------
+def _read_json(path: str, what: str) -> Any:
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise FormatError(f"cannot read {what} {path!r}: no such file") from None
+    except IsADirectoryError:
+        raise FormatError(f"cannot read {what} {path!r}: it is a directory") from None
+    except UnicodeDecodeError:
+        raise FormatError(f"cannot read {what} {path!r}: not UTF-8 text") from None
+    except OSError as exc:
+        raise FormatError(f"cannot read {what} {path!r}: {exc.strerror or exc}") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise FormatError(f"{what} {path!r} is not valid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}") from None
+
+
+def _read_bba(path: str) -> MassFunction:
+    data = _read_json(path, "BBA file")
+    try:
+        return MassFunction.from_dict(data)
+    except BeliefError as exc:
+        raise type(exc)(f"{path}: {exc}") from None
+
+
+def _print_json(data: Any) -> None:
+    print(json.dumps(data, indent=2, ensure_ascii=False))
+
+
+def _table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
+    cells = [[str(h) for h in header]] + [[_fmt(c) for c in row] for row in rows]
+    widths = [max(len(row[i]) for row in cells) for i in range(len(header))]
+    lines = []
+    for k, row in enumerate(cells):
+        lines.append("  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(row, widths))).rstrip())
+        if k == 0:
+            lines.append("  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+def _fmt(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:.6f}"
+    return str(value)
+
+
+# -- lattice --------------------------------------------------------------------------------------
+def _cmd_lattice(args: argparse.Namespace) -> int:
+    if args.frame is not None and args.n is not None:
+        raise CommandError("belief lattice: error: give either N or --frame, not both")
+    if args.frame is not None:
+        frame = Frame.parse(args.frame)
+    elif args.n is not None:
+        if args.n < 1:
+            raise CommandError(f"belief lattice: error: N must be a positive number of hypotheses, got {args.n}")
+        frame = Frame.numbered(args.n)
+    else:
+        raise CommandError("belief lattice: error: give the number of hypotheses N or --frame a,b,c")
+    model = Model.from_dict(frame, _read_json(args.model, "model file")) if args.model else Model.free(frame)
+    lattice = hyper_power_set(model)
+    if args.json:
+        data: dict[str, Any] = {"frame": list(frame.hypotheses), "count": len(lattice)}
+        if not args.count:
+            data["elements"] = [str(e) for e in lattice]
+        _print_json(data)
+    elif args.count:
+        print(len(lattice))
+    else:
+        out = sys.stdout
+        chunk: list[str] = []
+        for element in lattice:
+            chunk.append(str(element))
+            if len(chunk) >= 4096:
+                out.write("\n".join(chunk) + "\n")
+                chunk = []
+        if chunk:
+            out.write("\n".join(chunk) + "\n")
+    return 0
+
+
+# -- measures ---------------------------------------------------------------------------------------
+def _queries(m: MassFunction, given: Sequence[str] | None) -> list[str]:
+    if given:
+        for q in given:
+            m.frame.element(q)  # fail early, with the query named
+        return list(given)
+    return [str(e) for e in m.focal]
+
+
+def _cmd_measures(args: argparse.Namespace) -> int:
+    m = _read_bba(args.bba)
+    queries = _queries(m, args.query)
+    batch = m.batch()
+    columns = {name: getattr(batch, name)(queries)[0].tolist() for name in ("bel", "pls", "q", "betp")}
+    if args.json:
+        _print_json({q: {name: columns[name][i] for name in columns} for i, q in enumerate(queries)})
+    else:
+        rows = [[q] + [columns[name][i] for name in columns] for i, q in enumerate(queries)]
+        print(_table(["proposition", "bel", "pls", "q", "betp"], rows))
+    return 0
+
+
+# -- transform ---------------------------------------------------------------------------------------
+def _cmd_transform(args: argparse.Namespace) -> int:
+    m = _read_bba(args.bba)
+    if args.pignistic or args.dsmp is not None:
+        if args.normalized:
+            raise CommandError("belief transform: error: --normalized goes with --condition")
+        names = list(m.frame.hypotheses)
+        extra = [q for q in _queries(m, args.query) if q not in names] if args.query else []
+        queries = names + extra
+        batch = m.batch()
+        if args.pignistic:
+            values = batch.betp(queries)[0].tolist()
+        else:
+            values = batch.dsmp(queries, epsilon=args.dsmp)[0].tolist()
+        probability = dict(zip(queries, values))
+        if args.json:
+            _print_json({"probability": probability})
+        else:
+            label = "BetP" if args.pignistic else f"DSmP(ε={args.dsmp:g})"
+            print(_table(["proposition", label], list(probability.items())))
+        return 0
+    if args.query:
+        raise CommandError("belief transform: error: --query goes with --pignistic or --dsmp")
+    if args.discount is not None:
+        if args.normalized:
+            raise CommandError("belief transform: error: --normalized goes with --condition")
+        result = m.discount(args.discount)
+    else:
+        result = m.condition(args.condition, normalized=args.normalized)
+    if args.json:
+        _print_json(result.to_dict())
+    else:
+        print(_table(["proposition", "mass"], [(str(e), v) for e, v in result.items()]))
+    return 0
+
+
+# -- demo ----------------------------------------------------------------------------------------------
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from belief.demo import run_demo
+
+    run_demo(sys.stdout)
+    return 0
+
+
+# -- parser ---------------------------------------------------------------------------------------------
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser, with the plugins' subcommands registered."""
+    parser = _Parser(prog="belief", description="Evidence fusion with belief functions (DST and DSmT).")
+    from belief import __version__
+
+    parser.add_argument("--version", action="version", version=f"belief {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+
+    p = sub.add_parser("lattice", help="list or count the hyper-power set D^Θ",
+                       description="List or count D^Θ (∅ included) under a model.")
+    p.add_argument("n", nargs="?", type=int, metavar="N", help="number of hypotheses, named t1..tN")
+    p.add_argument("--frame", metavar="a,b,c", help="comma-separated hypothesis names")
+    p.add_argument("--model", metavar="MODEL.json", help="model file (default: free DSm model)")
+    p.add_argument("--count", action="store_true", help="print only the number of elements")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=_cmd_lattice)
+
+    p = sub.add_parser("measures", help="bel, pls, q and betp of propositions",
+                       description="Belief, plausibility, commonality and pignistic probability.")
+    p.add_argument("bba", metavar="BBA.json")
+    p.add_argument("--query", nargs="+", metavar="PROP", help="propositions (default: every focal element)")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=_cmd_measures)
+
+    p = sub.add_parser("transform", help="pignistic/DSmP probabilities, discounting, conditioning",
+                       description="Probabilistic transformations and operations on one mass function.")
+    p.add_argument("bba", metavar="BBA.json")
+    how = p.add_mutually_exclusive_group(required=True)
+    how.add_argument("--pignistic", action="store_true", help="generalised pignistic transformation BetP")
+    how.add_argument("--dsmp", type=float, metavar="EPS", help="DSmP with the given ε")
+    how.add_argument("--discount", type=float, metavar="ALPHA", help="Shafer discounting, α = reliability")
+    how.add_argument("--condition", metavar="PROP", help="Dempster conditioning on PROP")
+    p.add_argument("--normalized", action="store_true", help="with --condition: remove m(∅) and rescale")
+    p.add_argument("--query", nargs="+", metavar="PROP", help="extra propositions for --pignistic/--dsmp")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=_cmd_transform)
+
+    p = sub.add_parser("demo", help="a short demonstration on embedded data",
+                       description="Fuse the evidence of an embedded example and print the results.")
+    p.set_defaults(func=_cmd_demo)
+
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        try:
+            ep.load()(sub)
+        except Exception as exc:  # a broken plugin must not break the core commands
+            print(f"belief: warning: plugin {ep.name!r} could not be loaded: {exc}", file=sys.stderr)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit status."""
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return 2
+        return int(args.func(args) or 0)
+    except CommandError as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    except BeliefError as exc:
+        print(f"belief: error: {exc}", file=sys.stderr)
+        return 1
+    except BrokenPipeError:
+        return 0
+    except KeyboardInterrupt:
+        print("belief: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
