@@ -170,18 +170,18 @@ def check_masses(values: np.ndarray, focal: Sequence[Element], model: Model, sub
     bad = ~np.isfinite(values)
     if bad.any():
         r, c = map(int, np.argwhere(bad)[0])
-        raise InvalidMassError(f"mass {values[r, c]!r} {where(r, c)} is not a finite number".replace("  ", " "))
+        raise InvalidMassError(f"mass {float(values[r, c])!r} {where(r, c)} is not a finite number".replace("  ", " "))
     negative = values < 0
     if negative.any():
         r, c = map(int, np.argwhere(negative)[0])
-        raise InvalidMassError(f"negative mass {values[r, c]!r} {where(r, c)}")
+        raise InvalidMassError(f"negative mass {float(values[r, c])!r} {where(r, c)}")
     totals = _row_sums(values)
     off = np.abs(totals - 1.0) > SUM_TOLERANCE
     if off.any():
         r = int(np.flatnonzero(off)[0])
         label = where(r)
         raise InvalidMassError(
-            f"masses {label + ' ' if label else ''}sum to {totals[r]!r}, not 1 (tolerance {SUM_TOLERANCE:g})"
+            f"masses {label + ' ' if label else ''}sum to {float(totals[r])!r}, not 1 (tolerance {SUM_TOLERANCE:g})"
         )
     if not subnormal:
         for col, element in enumerate(focal):
@@ -191,7 +191,7 @@ def check_masses(values: np.ndarray, focal: Sequence[Element], model: Model, sub
                     what = "the empty set" if element.is_empty else f"{element}, which is empty under the {model.kind} model"
                     label = where(int(rows[0]))
                     raise InvalidMassError(
-                        f"mass {values[rows[0], col]!r} {label + ' ' if label else ''}on {what}; "
+                        f"mass {float(values[rows[0], col])!r} {label + ' ' if label else ''}on {what}; "
                         "pass subnormal=True to allow an unnormalised (open-world) mass function"
                     )
 
@@ -319,12 +319,9 @@ class MassBatch:
         row = self.values[index]
         if row.ndim != 1:
             raise TypeError("index a batch with one integer; use .values for slices")
-        keep = row > 0
-        return MassFunction._trusted(
-            self.model,
-            tuple(e for e, k in zip(self.focal, keep.tolist()) if k),
-            row[keep],
-        )
+        # canonical order of focal elements, as MassFunction equality and hashing expect
+        kept = sorted((i for i, k in enumerate((row > 0).tolist()) if k), key=lambda i: self.focal[i].sort_key)
+        return MassFunction._trusted(self.model, tuple(self.focal[i] for i in kept), row[kept])
 
     def __iter__(self):
         for i in range(len(self)):

@@ -64,9 +64,14 @@ def reduce_terms(terms: Iterable[int]) -> tuple[int, ...]:
     >>> reduce_terms([0b100, 0b011, 0b111])
     (3, 4)
     """
+    unique = sorted(set(terms), key=int.bit_count)
+    if not unique:
+        return ()
+    smallest = unique[0].bit_count()
     kept: list[int] = []
-    for term in sorted(set(terms), key=int.bit_count):
-        if not any(k & ~term == 0 for k in kept):
+    for term in unique:
+        # Terms of the smallest size cannot absorb one another.
+        if term.bit_count() == smallest or not any(k & ~term == 0 for k in kept):
             kept.append(term)
     if len(kept) > 1:
         kept.sort(key=term_key)

@@ -73,11 +73,17 @@ class MassFunction(Mapping):
         merged: dict[Element, list[float]] = {}
         for key, value in masses.items():
             element = model.frame.element(key)
+            mass = _as_mass(value, key)
             if model.is_empty(element):
+                if element.terms and mass > 0 and not subnormal:
+                    raise InvalidMassError(
+                        f"mass {mass!r} on {element}, which is empty under the {model.kind} model; "
+                        "pass subnormal=True to allow an unnormalised (open-world) mass function"
+                    )
                 element = model.frame.empty
             else:
                 element = model.reduce(element)
-            merged.setdefault(element, []).append(_as_mass(value, key))
+            merged.setdefault(element, []).append(mass)
         items = sorted(((e, math.fsum(v)) for e, v in merged.items()), key=lambda ev: ev[0].sort_key)
         if not items:
             raise InvalidMassError("a mass function needs at least one focal element")

@@ -1,0 +1,257 @@
+"""Hypothesis strategies and slow, literal reference helpers shared by the test modules.
+
+The reference helpers work directly on the definitions of SPEC A.1/A.2: a Venn region is a
+non-empty set S of hypotheses (an int bit mask), an element of D^Θ is the set of regions it
+contains (region S is in the element iff one of its conjunctions is a subset of S), and a
+model is the set of regions it allows.  Nothing here relies on the library's own ∩, ∪, ⊆,
+reduction or cardinality code, so the tests can compare the library against it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from hypothesis import assume
+from hypothesis import strategies as st
+
+from belief import Element, Frame, MassFunction, Model
+
+# -- literal Venn-region semantics ---------------------------------------------------------------
+
+
+def all_regions(n: int) -> frozenset[int]:
+    """Every Venn region of an n-hypothesis frame: the non-empty subsets of {0..n-1}."""
+    return frozenset(range(1, 1 << n))
+
+
+def regions_of_terms(terms, n: int) -> frozenset[int]:
+    """Regions contained in the union of the given conjunctions (hypothesis bit masks)."""
+    terms = list(terms)
+    return frozenset(s for s in range(1, 1 << n) if any(t & s == t for t in terms))
+
+
+def regions_of(element: Element) -> frozenset[int]:
+    """The region set of a library element, read literally from its conjunctions."""
+    return regions_of_terms(element.terms, len(element.frame))
+
+
+def hypothesis_regions(n: int, i: int) -> frozenset[int]:
+    """θ_i as a region set: every region that contains hypothesis i."""
+    return frozenset(s for s in range(1, 1 << n) if s >> i & 1)
+
+
+def minimal_regions(regions) -> list[int]:
+    """The regions of a family that contain no other region of the family."""
+    regions = list(regions)
+    return [r for r in regions if not any(s != r and s & r == s for s in regions)]
+
+
+def term_text(frame: Frame, mask: int) -> str:
+    """A conjunction written out by hand: the names of its hypotheses joined by '&'."""
+    return "&".join(name for i, name in enumerate(frame.hypotheses) if mask >> i & 1)
+
+
+def free_allowed(n: int) -> frozenset[int]:
+    return all_regions(n)
+
+
+def shafer_allowed(n: int) -> frozenset[int]:
+    """Shafer's model allows the singleton regions only."""
+    return frozenset(1 << i for i in range(n))
+
+
+def hybrid_allowed(n: int, empty_terms) -> frozenset[int]:
+    """A region is allowed unless it contains a conjunction declared empty."""
+    empty_terms = list(empty_terms)
+    return frozenset(s for s in range(1, 1 << n) if not any(t & s == t for t in empty_terms))
+
+
+def tracking_allowed(n: int, false_alarm: int) -> frozenset[int]:
+    """Tracking model: any set of targets, plus the false-alarm region on its own."""
+    fa = 1 << false_alarm
+    return frozenset(s for s in range(1, 1 << n) if not (s & fa and s != fa))
+
+
+@dataclass(frozen=True)
+class ModelCase:
+    """A model together with its allowed regions computed from the definition."""
+
+    model: Model
+    allowed: frozenset[int]
+    label: str
+
+    @property
+    def frame(self) -> Frame:
+        return self.model.frame
+
+    @property
+    def n(self) -> int:
+        return len(self.model.frame)
+
+    def regions(self, element: Element) -> frozenset[int]:
+        """Regions of an element that survive under the model."""
+        return regions_of(element) & self.allowed
+
+
+# -- strategies ---------------------------------------------------------------------------------------
+
+
+def frames(min_n: int = 1, max_n: int = 5):
+    return st.integers(min_n, max_n).map(Frame.numbered)
+
+
+def conjunctions(n: int):
+    """A non-empty conjunction mask of an n-hypothesis frame."""
+    return st.integers(1, (1 << n) - 1)
+
+
+def elements(frame: Frame, max_terms: int = 4):
+    """Arbitrary elements of D^Θ (the empty one included), from random conjunctions."""
+    n = len(frame)
+    return st.lists(conjunctions(n), max_size=max_terms).map(lambda terms: Element(frame, terms))
+
+
+def expressions(n: int, max_leaves: int = 8):
+    """Expression trees over θ_0..θ_{n-1}: ("h", i), ("empty",), ("&", x, y), ("|", x, y)."""
+    leaves = st.integers(0, n).map(lambda i: ("empty",) if i == n else ("h", i))
+    return st.recursive(
+        leaves,
+        lambda kids: st.tuples(st.sampled_from(["&", "|"]), kids, kids),
+        max_leaves=max_leaves,
+    )
+
+
+def expression_regions(expr, n: int) -> frozenset[int]:
+    """Evaluate an expression tree as a region set (∩ and ∪ are set operations)."""
+    if expr[0] == "h":
+        return hypothesis_regions(n, expr[1])
+    if expr[0] == "empty":
+        return frozenset()
+    left, right = expression_regions(expr[1], n), expression_regions(expr[2], n)
+    return left & right if expr[0] == "&" else left | right
+
+
+def expression_element(expr, frame: Frame) -> Element:
+    """Evaluate an expression tree with the library's ``&`` and ``|`` operators."""
+    if expr[0] == "h":
+        return frame[frame.hypotheses[expr[1]]]
+    if expr[0] == "empty":
+        return frame.empty
+    left, right = expression_element(expr[1], frame), expression_element(expr[2], frame)
+    return left & right if expr[0] == "&" else left | right
+
+
+def expression_text(expr, frame: Frame, *, unicode: bool = False, minimal_parentheses: bool = True) -> str:
+    """Write an expression tree as a proposition string.
+
+    With ``minimal_parentheses`` a union is parenthesised only inside an intersection, so the
+    string relies on ∩ binding tighter than ∪; otherwise every operation is parenthesised.
+    """
+    and_op, or_op, empty = (" ∩ ", " ∪ ", "∅") if unicode else (" & ", " | ", "empty")
+
+    def write(e, inside_and: bool) -> str:
+        if e[0] == "h":
+            return frame.hypotheses[e[1]]
+        if e[0] == "empty":
+            return empty
+        if e[0] == "&":
+            text = write(e[1], True) + and_op + write(e[2], True)
+            return text if minimal_parentheses else f"({text})"
+        text = write(e[1], False) + or_op + write(e[2], False)
+        return f"({text})" if (inside_and or not minimal_parentheses) else text
+
+    return write(expr, False)
+
+
+@st.composite
+def hybrid_cases(draw, frame: Frame, max_constraints: int = 3) -> ModelCase:
+    """A hybrid model declaring a few random propositions (unions of conjunctions) empty."""
+    n = len(frame)
+    props = draw(st.lists(st.lists(conjunctions(n), min_size=1, max_size=2), max_size=max_constraints))
+    texts = ["|".join(term_text(frame, t) for t in prop) for prop in props]
+    empty_terms = [t for prop in props for t in prop]
+    return ModelCase(Model.hybrid(frame, texts), hybrid_allowed(n, empty_terms), f"hybrid {texts}")
+
+
+@st.composite
+def model_cases(draw, frame: Frame, kinds=("free", "shafer", "hybrid", "tracking")) -> ModelCase:
+    n = len(frame)
+    choices = [k for k in kinds if k != "tracking" or n >= 2]
+    kind = draw(st.sampled_from(choices))
+    if kind == "free":
+        return ModelCase(Model.free(frame), free_allowed(n), "free")
+    if kind == "shafer":
+        return ModelCase(Model.shafer(frame), shafer_allowed(n), "shafer")
+    if kind == "hybrid":
+        return draw(hybrid_cases(frame))
+    fa = draw(st.integers(0, n - 1))
+    return ModelCase(Model.tracking(frame, frame.hypotheses[fa]), tracking_allowed(n, fa), f"tracking FA={fa}")
+
+
+def any_model_cases(min_n: int = 1, max_n: int = 5, kinds=("free", "shafer", "hybrid", "tracking")):
+    return frames(min_n, max_n).flatmap(lambda f: model_cases(f, kinds))
+
+
+@dataclass(frozen=True)
+class MassCase:
+    """Raw input of a mass function: distinct propositions and masses, as handed to the library."""
+
+    case: ModelCase
+    entries: tuple[tuple[Element, float], ...]
+    subnormal: bool
+
+    def build(self) -> MassFunction:
+        return MassFunction(dict(self.entries), model=self.case.model, subnormal=self.subnormal)
+
+    def region_masses(self) -> list[tuple[frozenset[int], float]]:
+        """(regions under the model, mass) for every entry; empty region sets are ∅."""
+        return [(self.case.regions(e), v) for e, v in self.entries]
+
+
+def _normalised(weights: list[int]) -> list[float]:
+    total = sum(weights)
+    return [w / total for w in weights]
+
+
+@st.composite
+def _entries(draw, case: ModelCase, max_focal: int, subnormal: bool) -> tuple[tuple[Element, float], ...]:
+    frame = case.frame
+    # half of the conjunctions are drawn among the allowed regions, so that few are rejected
+    term = st.one_of(st.sampled_from(sorted(case.allowed)), conjunctions(case.n))
+    candidates = (st.lists(term, min_size=1, max_size=3)
+                  .map(lambda terms: Element(frame, terms))
+                  .filter(lambda e: bool(case.regions(e))))
+    focal = draw(st.lists(candidates, min_size=1, max_size=max_focal, unique=True))
+    if subnormal:
+        # mass on ∅ itself and/or on an element that the model declares empty
+        extras = [frame.empty]
+        empty_terms = [t for t in range(1, 1 << case.n) if t not in case.allowed]
+        if empty_terms:
+            extras.append(Element(frame, [draw(st.sampled_from(empty_terms))]))
+        focal += draw(st.lists(st.sampled_from(extras), min_size=1, max_size=2, unique=True))
+    weights = draw(st.lists(st.integers(1, 20), min_size=len(focal), max_size=len(focal)))
+    return tuple(zip(focal, _normalised(weights)))
+
+
+@st.composite
+def mass_cases(draw, min_n: int = 1, max_n: int = 4, kinds=("free", "shafer", "hybrid", "tracking"),
+               subnormal=False, max_focal: int = 5) -> MassCase:
+    """Random mass functions under random models.
+
+    ``subnormal`` is False (normal mass functions only), True (always some mass on ∅) or
+    None (either).
+    """
+    case = draw(any_model_cases(min_n, max_n, kinds))
+    assume(case.allowed)
+    sub = draw(st.booleans()) if subnormal is None else subnormal
+    return MassCase(case, draw(_entries(case, max_focal, sub)), sub)
+
+
+@st.composite
+def mass_case_lists(draw, min_n: int = 1, max_n: int = 4, size: int = 4,
+                    kinds=("free", "shafer", "hybrid", "tracking"), max_focal: int = 4) -> list[MassCase]:
+    """Several normal mass functions under one shared model."""
+    case = draw(any_model_cases(min_n, max_n, kinds))
+    assume(case.allowed)
+    count = draw(st.integers(1, size))
+    return [MassCase(case, draw(_entries(case, max_focal, False)), False) for _ in range(count)]
