@@ -1,0 +1,217 @@
+"""The ``belief`` command line: outputs, JSON formats and one-line errors."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from belief import Frame, MassFunction, Model
+from belief.cli import main
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture
+def bba(tmp_path):
+    def write(data, name="m.json"):
+        path = tmp_path / name
+        path.write_text(data if isinstance(data, str) else json.dumps(data), encoding="utf-8")
+        return str(path)
+
+    return write
+
+
+HYBRID = {"frame": ["a", "b", "c"], "model": {"type": "hybrid", "empty": ["a&b"]},
+          "mass": {"a": 0.5, "b|c": 0.3, "a|b|c": 0.2}}
+
+
+# -- lattice ------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("n, count", [(1, 2), (2, 5), (3, 19), (4, 167)])
+def test_lattice_count(capsys, n, count):
+    code, out, _ = run(capsys, "lattice", str(n), "--count")
+    assert code == 0 and out.strip() == str(count)
+
+
+def test_lattice_lists_named_hypotheses(capsys):
+    code, out, _ = run(capsys, "lattice", "2")
+    assert code == 0
+    frame = Frame.numbered(2)
+    listed = [frame.element(line) for line in out.split()]
+    assert len(listed) == 5 == len(set(listed))
+    assert frame.empty in listed and frame.total in listed and frame.element("t1&t2") in listed
+
+
+def test_lattice_json_with_frame_and_model(capsys, tmp_path):
+    model = tmp_path / "model.json"
+    model.write_text(json.dumps({"type": "shafer"}))
+    code, out, _ = run(capsys, "lattice", "--frame", "x,y,z", "--model", str(model), "--json")
+    data = json.loads(out)
+    assert code == 0
+    assert data["frame"] == ["x", "y", "z"] and data["count"] == 8 == len(data["elements"])
+    frame = Frame(["x", "y", "z"])
+    assert {frame.element(e) for e in data["elements"]} == {
+        frame.element(p) for p in ["empty", "x", "y", "z", "x|y", "x|z", "y|z", "x|y|z"]}
+
+
+def test_lattice_json_count_has_no_elements(capsys):
+    code, out, _ = run(capsys, "lattice", "3", "--count", "--json")
+    assert json.loads(out) == {"frame": ["t1", "t2", "t3"], "count": 19}
+
+
+# -- measures -----------------------------------------------------------------------------------------
+def test_measures_json_matches_library(capsys, bba):
+    path = bba(HYBRID)
+    code, out, _ = run(capsys, "measures", path, "--query", "a", "b&c", "c|b", "--json")
+    data = json.loads(out)
+    m = MassFunction.from_dict(HYBRID)
+    assert code == 0 and list(data) == ["a", "b&c", "c|b"]
+    for query, row in data.items():
+        assert row == {"bel": m.bel(query), "pls": m.pls(query), "q": m.q(query), "betp": m.betp(query)}
+
+
+def test_measures_default_queries_are_focal_elements(capsys, bba):
+    code, out, _ = run(capsys, "measures", bba(HYBRID), "--json")
+    assert code == 0 and set(json.loads(out)) == {"a", "b|c", "a|b|c"}
+
+
+def test_measures_table(capsys, bba):
+    code, out, _ = run(capsys, "measures", bba(HYBRID))
+    lines = out.splitlines()
+    assert code == 0 and lines[0].split() == ["proposition", "bel", "pls", "q", "betp"]
+    assert lines[2].split()[0] == "a" and float(lines[2].split()[1]) == pytest.approx(0.5)
+
+
+# -- transform ---------------------------------------------------------------------------------------
+def test_transform_pignistic_with_query(capsys, bba):
+    code, out, _ = run(capsys, "transform", bba(HYBRID), "--pignistic", "--query", "a|b", "--json")
+    m = MassFunction.from_dict(HYBRID)
+    probability = json.loads(out)["probability"]
+    assert code == 0 and list(probability) == ["a", "b", "c", "a|b"]
+    assert probability == {q: m.betp(q) for q in probability}
+
+
+def test_transform_dsmp(capsys, bba):
+    data = {"frame": ["a", "b"], "model": {"type": "shafer"}, "mass": {"a": 0.4, "b": 0.2, "a|b": 0.4}}
+    code, out, _ = run(capsys, "transform", bba(data), "--dsmp", "0", "--json")
+    probability = json.loads(out)["probability"]
+    # DSmP_0(a) = .4 + .4 * .4 / (.4 + .2) = 2/3, by hand from the definition.
+    assert code == 0 and probability["a"] == pytest.approx(2 / 3) and probability["b"] == pytest.approx(1 / 3)
+
+
+def test_transform_discount_round_trips_as_bba(capsys, bba):
+    code, out, _ = run(capsys, "transform", bba(HYBRID), "--discount", "0.5", "--json")
+    result = MassFunction.from_json(out)
+    assert code == 0 and result == MassFunction.from_dict(HYBRID).discount(0.5)
+    assert result.model == Model.hybrid(Frame(["a", "b", "c"]), ["a&b"])
+
+
+def test_transform_condition_unnormalised_is_subnormal(capsys, bba):
+    code, out, _ = run(capsys, "transform", bba(HYBRID), "--condition", "b", "--json")
+    data = json.loads(out)
+    assert code == 0 and data["subnormal"] is True
+    assert data["mass"] == {"empty": 0.5, "b": 0.5}
+    code, out, _ = run(capsys, "transform", bba(HYBRID), "--condition", "b", "--normalized", "--json")
+    assert json.loads(out)["mass"] == {"b": 1.0} and "subnormal" not in json.loads(out)
+
+
+def test_subnormal_file_is_accepted_only_when_declared(capsys, bba):
+    data = {"frame": ["a", "b"], "mass": {"empty": 0.2, "a": 0.8}}
+    code, _, err = run(capsys, "measures", bba(data))
+    assert code == 1 and "subnormal" in err
+    code, out, _ = run(capsys, "measures", bba(dict(data, subnormal=True)), "--query", "a", "--json")
+    assert code == 0 and json.loads(out)["a"]["bel"] == pytest.approx(0.8)
+
+
+# -- errors: one line, non-zero exit, no traceback --------------------------------------------------------
+BAD_FILES = [
+    ({"frame": ["a", "b"], "mass": {"c": 1.0}}, "unknown hypothesis 'c'"),
+    ({"frame": ["a", "b"], "mass": {"a": 0.5, "b": 0.4}}, "sum to"),
+    ({"frame": ["a", "b"], "mass": {"a": -0.5, "b": 1.5}}, "negative mass"),
+    ('{"frame": ["a", "b"], "mass": {"a": NaN, "b": 1.0}}', "not a finite number"),
+    ({"frame": ["a", "b"], "mass": {"a&": 1.0}}, "malformed proposition"),
+    ({"frame": ["a", "b"], "mass": {"(a|b": 1.0}}, "missing ')'"),
+    ('{"frame": ["a", "b"], "mass": ', "not valid JSON"),
+    ({"frame": ["a", "b"]}, "no \"mass\""),
+    ({"frame": ["a", "b"], "model": {"type": "weird"}, "mass": {"a": 1.0}}, "unknown model type"),
+]
+
+
+@pytest.mark.parametrize("content, message", BAD_FILES)
+def test_bad_bba_files(capsys, bba, content, message):
+    code, out, err = run(capsys, "measures", bba(content))
+    assert code == 1 and out == ""
+    assert len(err.strip().splitlines()) == 1
+    assert message in err and "Traceback" not in err
+
+
+def test_unreadable_file(capsys, tmp_path):
+    code, _, err = run(capsys, "measures", str(tmp_path / "missing.json"))
+    assert code == 1 and "no such file" in err and len(err.strip().splitlines()) == 1
+
+
+def test_lattice_too_large_says_why(capsys):
+    code, _, err = run(capsys, "lattice", "7", "--count")
+    assert code == 1 and "cannot be enumerated" in err and len(err.strip().splitlines()) == 1
+
+
+def test_total_conflict_on_normalised_conditioning(capsys, bba):
+    code, _, err = run(capsys, "transform", bba(HYBRID), "--condition", "a&b", "--normalized")
+    assert code == 1 and "total conflict" in err
+
+
+@pytest.mark.parametrize("argv", [
+    ["lattice", "x"],
+    ["lattice"],
+    ["lattice", "3", "--frame", "a,b"],
+    ["transform", "m.json"],
+    ["transform", "m.json", "--pignistic", "--discount", "0.5"],
+    ["nosuchcommand"],
+])
+def test_usage_errors_exit_2_with_one_line(capsys, argv):
+    code, _, err = run(capsys, *argv)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "error" in err
+
+
+def test_console_script_error_has_no_traceback(tmp_path):
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"frame": ["a"], "mass": {"a": 2.0}}))
+    proc = subprocess.run([sys.executable, "-m", "belief.cli", "measures", str(bad)],
+                          capture_output=True, text=True, check=False)
+    assert proc.returncode == 1 and proc.stdout == ""
+    assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
+
+
+def test_demo_runs(capsys):
+    code, out, _ = run(capsys, "demo")
+    assert code == 0 and "Paul" in out and "pignistic" in out
+
+
+def test_plugin_entry_points_are_registered(monkeypatch, capsys):
+    import belief.cli as cli
+
+    class FakeEntryPoint:
+        name = "fake"
+
+        @staticmethod
+        def load():
+            def register(sub):
+                p = sub.add_parser("hello")
+                p.set_defaults(func=lambda args: print("hello from a plugin") or 0)
+            return register
+
+    class Broken:
+        name = "broken"
+
+        @staticmethod
+        def load():
+            raise ImportError("missing dependency")
+
+    monkeypatch.setattr(cli, "entry_points", lambda group: [FakeEntryPoint, Broken] if group == cli.ENTRY_POINT_GROUP else [])
+    code, out, err = run(capsys, "hello")
+    assert code == 0 and out.strip() == "hello from a plugin"
+    assert "plugin 'broken' could not be loaded" in err
