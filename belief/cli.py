@@ -104,16 +104,16 @@ def _cmd_lattice(args: argparse.Namespace) -> int:
     if args.json:
         data: dict[str, Any] = {"frame": list(frame.hypotheses), "count": len(lattice)}
         if not args.count:
-            data["elements"] = [str(e) for e in lattice]
+            data["elements"] = list(lattice.strings())
         _print_json(data)
     elif args.count:
         print(len(lattice))
     else:
         out = sys.stdout
         chunk: list[str] = []
-        for element in lattice:
-            chunk.append(str(element))
-            if len(chunk) >= 4096:
+        for text in lattice.strings():
+            chunk.append(text)
+            if len(chunk) >= 65536:
                 out.write("\n".join(chunk) + "\n")
                 chunk = []
         if chunk:

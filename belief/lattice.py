@@ -20,7 +20,7 @@ from typing import Union, overload
 import numpy as np
 
 from belief.errors import LatticeTooLargeError
-from belief.frame import Element, Frame
+from belief.frame import Element, Frame, reduce_terms, term_key
 from belief.model import Model
 
 __all__ = ["HyperPowerSet", "hyper_power_set", "allowed_regions", "MAX_REGIONS", "MAX_ELEMENTS"]
@@ -270,8 +270,10 @@ class HyperPowerSet(Sequence):
         return self.element_of(int(self.masks[index]))
 
     def __iter__(self) -> Iterator[Element]:
-        for m in self.masks.tolist():
-            yield self.element_of(m)
+        frame, regions = self.frame, self.regions
+        for start in range(0, len(self), 65536):
+            for minimal in self._minimal_masks(self.masks[start:start + 65536]).tolist():
+                yield Element._make(frame, reduce_terms(r for i, r in enumerate(regions) if minimal >> i & 1))
 
     def __contains__(self, element: object) -> bool:
         if not isinstance(element, Element) or element.frame != self.frame:
@@ -280,9 +282,54 @@ class HyperPowerSet(Sequence):
 
     def element_of(self, mask: int) -> Element:
         """The element whose region mask is ``mask`` (its minimal regions are its terms)."""
-        regions = [r for i, r in enumerate(self.regions) if mask >> i & 1]
-        minimal = [r for r in regions if not any(s != r and s & r == s for s in regions)]
-        return Element(self.frame, minimal)
+        minimal = int(self._minimal_masks(np.array([mask], dtype=np.uint64))[0])
+        return Element._make(self.frame, reduce_terms(r for i, r in enumerate(self.regions) if minimal >> i & 1))
+
+    def _minimal_masks(self, masks: np.ndarray) -> np.ndarray:
+        """For each up-set, the mask of its minimal regions (those with no allowed one-smaller region in it)."""
+        minimal = masks.copy()
+        for k, below in enumerate(self._below):
+            if below:
+                bit, below_u = np.uint64(1 << k), np.uint64(below)
+                minimal[(masks & below_u) != 0] &= ~bit
+        return minimal
+
+    @property
+    def _below(self) -> list[int]:
+        """For each region, the mask of its allowed one-smaller regions."""
+        cached = getattr(self, "_below_cache", None)
+        if cached is None:
+            index = self._region_index
+            cached = []
+            for r in self.regions:
+                below = 0
+                for i in range(len(self.frame)):
+                    smaller = r & ~(1 << i)
+                    if smaller != r and smaller in index:
+                        below |= 1 << index[smaller]
+                cached.append(below)
+            self._below_cache = cached
+        return cached
+
+    def strings(self, style: str = "ascii", chunk: int = 65536) -> Iterator[str]:
+        """The canonical text of every element, in order; much faster than formatting elements one by one."""
+        names = [self.frame.term_name(r, style) for r in self.regions]
+        keys = [term_key(r) for r in self.regions]
+        joiner = "|" if style == "ascii" else " ∪ "
+        empty = "empty" if style == "ascii" else "∅"
+        for start in range(0, len(self), chunk):
+            for minimal in self._minimal_masks(self.masks[start:start + chunk]).tolist():
+                if not minimal:
+                    yield empty
+                    continue
+                picked = []
+                while minimal:
+                    low = minimal & -minimal
+                    picked.append(low.bit_length() - 1)
+                    minimal ^= low
+                if len(picked) > 1:
+                    picked.sort(key=keys.__getitem__)
+                yield joiner.join(names[k] for k in picked)
 
     def mask_of(self, element: Union[Element, str]) -> int:
         """The region mask of an element (reduced under the model first)."""

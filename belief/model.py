@@ -239,9 +239,12 @@ class Model:
         if not isinstance(data, Mapping):
             raise FormatError(f"a model must be a JSON object with a \"type\", got {data!r}")
         kind = data.get("type", "free" if "empty" not in data else "hybrid")
-        unknown = set(data) - {"type", "empty", "false_alarm"}
-        if unknown:
-            raise FormatError(f"unknown key(s) in model: {', '.join(sorted(map(str, unknown)))}")
+        accepted = {"type"} | {"hybrid": {"empty"}, "tracking": {"false_alarm"}}.get(kind, set())
+        unknown = set(data) - accepted
+        if unknown and kind in _KINDS:
+            raise FormatError(
+                f"key(s) {', '.join(sorted(map(str, unknown)))} do not belong to a {kind} model"
+            )
         if kind == "free":
             return cls.free(frame)
         if kind == "shafer":
