@@ -281,3 +281,14 @@ def test_shafer_regions_helper_agrees_with_the_model():
         model = Model.shafer(frame)
         regions = [r for r in range(1, 1 << n) if not model.is_empty(Element(frame, [r]))]
         assert frozenset(regions) == shafer_allowed(n)
+
+
+@pytest.mark.parametrize("data", [
+    {"type": "free", "empty": ["a&b"]},
+    {"type": "shafer", "false_alarm": "a"},
+    {"type": "hybrid", "empty": ["a&b"], "false_alarm": "a"},
+    {"type": "tracking", "false_alarm": "c", "empty": ["a&b"]},
+])
+def test_model_keys_that_do_not_belong_to_the_type_are_refused(data):
+    with pytest.raises(FormatError, match="do not belong"):
+        Model.from_dict(Frame(["a", "b", "c"]), data)
