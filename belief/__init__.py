@@ -30,6 +30,7 @@ from belief.frame import Element, Frame
 from belief.lattice import HyperPowerSet, hyper_power_set
 from belief.mass import MassFunction
 from belief.model import Model
+from belief.rules import RULES, UnknownRuleError, combine, sequential
 
 __version__ = "0.1.0"
 
@@ -50,6 +51,10 @@ __all__ = [
     "TotalConflictError",
     "UndefinedTransformError",
     "UnknownHypothesisError",
+    "UnknownRuleError",
+    "RULES",
+    "combine",
+    "sequential",
     "hyper_power_set",
     "__version__",
 ]

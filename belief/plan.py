@@ -1,0 +1,159 @@
+"""Compiled combination plans: index tables for a fixed tuple of focal-element lists.
+
+Combining s sources means visiting every tuple (X_1, …, X_s) of their focal elements.
+The tuples, their intersections under the fusion model and where each rule sends their
+product depend only on the focal elements, not on the masses, so they are compiled once
+(and cached) into integer arrays.  A rule then evaluates all N rows of a batch with a few
+numpy operations:
+
+* ``products`` gathers the masses of each tuple and multiplies them, shape (N, T);
+* a :class:`Scatter` adds contributions that go to the same result element with one
+  ``np.add.reduceat`` over contributions sorted by target.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import cached_property, lru_cache
+
+import numpy as np
+
+from belief.frame import Element
+from belief.model import Model
+
+__all__ = ["TuplePlan", "Scatter", "tuple_plan", "MAX_TUPLES"]
+
+#: Refuse joint combinations with more focal-element tuples than this.
+MAX_TUPLES = 20_000_000
+#: Rows are processed in chunks of about this many (row × tuple) entries, to bound memory.
+CHUNK_ENTRIES = 1 << 20
+
+
+class Scatter:
+    """Sums contributions into result elements: ``out[:, r] = Σ_{e: target[e]=r} contrib[:, e]``.
+
+    Parameters
+    ----------
+    targets : sequence of Element
+        The result element of each contribution, shape (E,).
+
+    Attributes
+    ----------
+    elements : tuple of Element
+        The distinct targets in canonical order (the result's focal elements).
+    order : ndarray of int, shape (E,)
+        Contribution indices sorted by target.
+    starts : ndarray of int, shape (R,)
+        Where each target's run begins in ``order``.
+    """
+
+    def __init__(self, targets: Sequence[Element]) -> None:
+        elements = sorted(set(targets), key=lambda e: e.sort_key)
+        index = {e: i for i, e in enumerate(elements)}
+        codes = np.fromiter((index[t] for t in targets), dtype=np.int64, count=len(targets))
+        order = np.argsort(codes, kind="stable")
+        sorted_codes = codes[order]
+        self.elements = tuple(elements)
+        self.order = order
+        self.starts = np.flatnonzero(np.r_[True, sorted_codes[1:] != sorted_codes[:-1]]) if len(targets) else np.zeros(0, np.int64)
+
+    def apply(self, sorted_contributions: np.ndarray) -> np.ndarray:
+        """Sum contributions that are already in ``order``; (N, E) -> (N, R)."""
+        if sorted_contributions.shape[1] == 0:
+            return np.zeros((sorted_contributions.shape[0], 0))
+        return np.add.reduceat(sorted_contributions, self.starts, axis=1)
+
+
+@dataclass(frozen=True, eq=False)
+class TuplePlan:
+    """All tuples of focal elements of s sources, with their intersections under a model.
+
+    Attributes
+    ----------
+    source_model, model : Model
+        The model the sources were elicited under, and the fusion model.
+    focal : tuple of tuple of Element
+        The focal elements of each source (as elicited).
+    """
+
+    source_model: Model
+    model: Model
+    focal: tuple[tuple[Element, ...], ...]
+
+    @property
+    def sizes(self) -> tuple[int, ...]:
+        return tuple(len(f) for f in self.focal)
+
+    @cached_property
+    def count(self) -> int:
+        return int(np.prod(self.sizes, dtype=np.int64))
+
+    @cached_property
+    def columns(self) -> tuple[np.ndarray, ...]:
+        """For each source, its focal-element column in every tuple (row-major order), shape (T,)."""
+        grids = np.indices(self.sizes, dtype=np.int64).reshape(len(self.sizes), -1)
+        return tuple(grids)
+
+    @cached_property
+    def projected(self) -> tuple[tuple[Element, ...], ...]:
+        """The focal elements reduced under the fusion model (∅ if they vanish there)."""
+        model = self.model
+        return tuple(tuple(model.reduce(x) for x in f) for f in self.focal)
+
+    @cached_property
+    def tuples(self) -> list[tuple[int, ...]]:
+        return list(zip(*(c.tolist() for c in self.columns)))
+
+    @cached_property
+    def meets(self) -> list[Element]:
+        """X_1 ∩ … ∩ X_s under the fusion model, for every tuple."""
+        return self._fold(lambda a, b: a & b)
+
+    @cached_property
+    def joins(self) -> list[Element]:
+        """X_1 ∪ … ∪ X_s under the fusion model, for every tuple."""
+        return self._fold(lambda a, b: a | b)
+
+    def _fold(self, op) -> list[Element]:
+        # Fold source by source, caching partial results per prefix of the tuple.
+        model = self.model
+        partial: dict[tuple[int, ...], Element] = {(i,): x for i, x in enumerate(self.projected[0])}
+        for source in range(1, len(self.focal)):
+            nxt: dict[tuple[int, ...], Element] = {}
+            for prefix, value in partial.items():
+                for i, x in enumerate(self.projected[source]):
+                    nxt[prefix + (i,)] = model.reduce(op(value, x))
+            partial = nxt
+        return [partial[t] for t in self.tuples]
+
+    @cached_property
+    def conflicting(self) -> np.ndarray:
+        """True where the tuple's intersection is empty under the fusion model, shape (T,)."""
+        return np.fromiter((not m.terms for m in self.meets), dtype=bool, count=self.count)
+
+    # -- evaluation ---------------------------------------------------------------------------
+    def products(self, values: Sequence[np.ndarray], order: np.ndarray | None = None) -> np.ndarray:
+        """Π_i m_i(X_i) for every tuple (optionally in ``order``); values[i] has shape (N, K_i)."""
+        columns = self.columns if order is None else tuple(c[order] for c in self.columns)
+        result = values[0][:, columns[0]]
+        for v, c in zip(values[1:], columns[1:]):
+            result *= v[:, c]
+        return result
+
+    def source_masses(self, values: Sequence[np.ndarray]) -> np.ndarray:
+        """m_i(X_i) of every tuple and source, shape (N, T, s)."""
+        return np.stack([v[:, c] for v, c in zip(values, self.columns)], axis=2)
+
+
+@lru_cache(maxsize=512)
+def tuple_plan(source_model: Model, model: Model, focal: tuple[tuple[Element, ...], ...]) -> TuplePlan:
+    """The cached :class:`TuplePlan` of these focal-element lists."""
+    return TuplePlan(source_model, model, focal)
+
+
+def row_chunks(n_rows: int, width: int):
+    """Slices of rows such that each chunk holds about ``CHUNK_ENTRIES`` (row × width) entries."""
+    step = max(1, CHUNK_ENTRIES // max(1, width))
+    for start in range(0, n_rows, step):
+        yield slice(start, min(n_rows, start + step))

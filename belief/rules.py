@@ -1,0 +1,725 @@
+"""Combination rules: a registry of plain functions over batches, and :func:`combine`.
+
+Every rule takes a list of s ≥ 2 :class:`~belief.batch.MassBatch` sources (one row per
+mass function, all with the same number of rows or a single row to broadcast) and the
+fusion model, and returns a :class:`~belief.batch.MassBatch`.  :func:`combine` is the
+entry point for single mass functions and batches alike::
+
+    combine(m1, m2, m3, rule="pcr6")
+
+Associative rules (conjunctive, DSmC, Dempster, disjunctive, Yager's conjunctive core) are
+evaluated by folding pairwise; the non-associative ones (Dubois–Prade, DSmH, PCR5, PCR6)
+are evaluated jointly over all tuples of focal elements, as their s-source definitions
+require; the R-weighted rule is folded in the given source order, as SPEC A.4 defines it.
+:func:`sequential` folds any rule pairwise on request.
+
+Dynamic fusion: sources carry the model they were elicited under; ``model=`` may name a
+stricter model for the fusion (see :meth:`belief.model.Model.is_refined_by`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Any, Union
+
+import numpy as np
+
+from belief.batch import MassBatch, check_refines
+from belief.errors import BeliefError, FrameError, InvalidMassError, ModelError, TotalConflictError
+from belief.frame import Element
+from belief.mass import MassFunction
+from belief.model import Model
+from belief.plan import MAX_TUPLES, Scatter, TuplePlan, row_chunks, tuple_plan
+
+__all__ = ["combine", "sequential", "RULES", "RuleInfo", "get_rule", "register_rule", "rule_names",
+           "UnknownRuleError"]
+
+
+class UnknownRuleError(BeliefError, KeyError):
+    """A rule name that the registry does not know."""
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return str(self.args[0])
+
+
+RuleFunction = Callable[..., MassBatch]
+
+
+@dataclass(frozen=True)
+class RuleInfo:
+    """A registered combination rule.
+
+    Attributes
+    ----------
+    name : str
+    function : callable
+        ``function(sources: list[MassBatch], model: Model, **options) -> MassBatch``.
+    summary : str
+        One line for ``belief rules``.
+    associative : bool
+        Whether folding pairwise gives the joint result.
+    keeps_conflict : bool
+        Whether the result may hold mass on ∅.
+    aliases : tuple of str
+    options : tuple of str
+        Keyword options the rule accepts.
+    """
+
+    name: str
+    function: RuleFunction
+    summary: str
+    associative: bool
+    keeps_conflict: bool = False
+    aliases: tuple[str, ...] = ()
+    options: tuple[str, ...] = field(default=())
+
+
+RULES: dict[str, RuleInfo] = {}
+_ALIASES: dict[str, str] = {}
+
+
+def register_rule(name: str, *, summary: str, associative: bool, keeps_conflict: bool = False,
+                  aliases: Sequence[str] = (), options: Sequence[str] = ()):
+    """Decorator that adds a rule function to the registry under ``name`` and ``aliases``."""
+
+    def decorate(function: RuleFunction) -> RuleFunction:
+        info = RuleInfo(name, function, summary, associative, keeps_conflict, tuple(aliases), tuple(options))
+        RULES[name] = info
+        for key in (name, *aliases):
+            _ALIASES[key.lower()] = name
+        return function
+
+    return decorate
+
+
+def rule_names() -> list[str]:
+    """The registered rule names (without aliases), in registration order."""
+    return list(RULES)
+
+
+def get_rule(name: Union[str, RuleInfo]) -> RuleInfo:
+    """Look a rule up by name or alias (case-insensitive); unknown names list the known ones."""
+    if isinstance(name, RuleInfo):
+        return name
+    if not isinstance(name, str):
+        raise TypeError(f"rule must be a name, got {type(name).__name__}")
+    key = _ALIASES.get(name.lower().replace("-", "_"))
+    if key is None:
+        raise UnknownRuleError(f"unknown rule {name!r}; known rules: {', '.join(RULES)}")
+    return RULES[key]
+
+
+# -- entry points ---------------------------------------------------------------------------------
+Source = Union[MassFunction, MassBatch]
+
+
+def _prepare(sources: Sequence[Source], model: Model | None) -> tuple[list[MassBatch], Model, bool]:
+    if len(sources) == 1 and isinstance(sources[0], (list, tuple)):
+        sources = list(sources[0])
+    if len(sources) < 2:
+        raise InvalidMassError(f"combination needs at least two sources, got {len(sources)}")
+    single = all(isinstance(s, MassFunction) for s in sources)
+    batches: list[MassBatch] = []
+    for k, s in enumerate(sources):
+        if isinstance(s, MassFunction):
+            batches.append(s.batch())
+        elif isinstance(s, MassBatch):
+            batches.append(s)
+        else:
+            raise TypeError(f"source {k + 1} is a {type(s).__name__}, not a MassFunction or MassBatch")
+    source_model = batches[0].model
+    for k, b in enumerate(batches[1:], start=2):
+        if b.model != source_model:
+            if b.frame != source_model.frame:
+                raise FrameError(f"source {k} has the frame {list(b.frame.hypotheses)}, "
+                                 f"source 1 has {list(source_model.frame.hypotheses)}")
+            raise ModelError(f"source {k} was elicited under the {b.model.kind} model and source 1 under the "
+                             f"{source_model.kind} model; read them under one model first (MassFunction.under)")
+    rows = {len(b) for b in batches} - {1}
+    if len(rows) > 1:
+        raise InvalidMassError(f"batches have different numbers of rows: {sorted(rows)}")
+    if model is None:
+        model = source_model
+    else:
+        check_refines(source_model, model)
+    return batches, model, single
+
+
+def combine(*sources: Source, rule: Union[str, RuleInfo] = "dempster", model: Model | None = None,
+            **options: Any) -> Source:
+    """Combine two or more sources of evidence with a rule of the registry.
+
+    Parameters
+    ----------
+    *sources : MassFunction or MassBatch
+        At least two, under one frame and model.  Batches must have the same number of
+        rows N (a one-row batch or a single mass function is broadcast).
+    rule : str
+        A name of :data:`RULES` or an alias (``belief rules`` lists them).
+    model : Model, optional
+        The fusion model; by default the sources' model.  A stricter model gives
+        dynamic fusion.
+    **options
+        Rule options, e.g. ``r_mode`` and ``empty_mode`` of the R-weighted rule.
+
+    Returns
+    -------
+    MassFunction or MassBatch
+        A mass function if every source is one, else a batch of N rows.
+
+    Raises
+    ------
+    UnknownRuleError
+        For a name the registry does not know (the message lists the known rules).
+    TotalConflictError
+        Dempster's rule on totally conflicting sources.
+
+    Examples
+    --------
+    >>> from belief import Frame, MassFunction, Model
+    >>> shafer = Model.shafer(Frame(["a", "b", "c"]))
+    >>> m1 = MassFunction({"a": 0.9, "c": 0.1}, model=shafer)
+    >>> m2 = MassFunction({"b": 0.9, "c": 0.1}, model=shafer)
+    >>> combine(m1, m2, rule="dempster")   # Zadeh's example
+    MassFunction({'c': 1.0}, model=Model.shafer(Frame(['a', 'b', 'c'])))
+    >>> {e: round(v, 12) for e, v in combine(m1, m2, rule="pcr6").to_mapping().items()}
+    {'a': 0.486, 'b': 0.486, 'c': 0.028}
+    """
+    info = get_rule(rule)
+    unknown = set(options) - set(info.options)
+    if unknown:
+        accepted = ", ".join(info.options) if info.options else "none"
+        raise InvalidMassError(f"rule {info.name!r} takes no option {', '.join(sorted(unknown))} (options: {accepted})")
+    batches, fusion_model, single = _prepare(sources, model)
+    result = info.function(batches, fusion_model, **options)
+    return result[0] if single else result
+
+
+def sequential(*sources: Source, rule: Union[str, RuleInfo] = "pcr6", model: Model | None = None,
+               **options: Any) -> Source:
+    """Fold a rule pairwise, left to right: ((m1 ⊕ m2) ⊕ m3) ⊕ …
+
+    For associative rules this equals :func:`combine`.  For PCR5, PCR6, DSmH and
+    Dubois–Prade it is a different (order-dependent) rule, offered for those who want
+    a fold; :func:`combine` uses their joint s-source definitions.
+
+    >>> from belief import Frame, MassFunction, Model
+    >>> shafer = Model.shafer(Frame(["a", "b"]))
+    >>> ms = [MassFunction({"a": 0.6, "b": 0.4}, model=shafer), MassFunction({"a": 0.2, "b": 0.8}, model=shafer),
+    ...       MassFunction({"a": 0.7, "b": 0.3}, model=shafer)]
+    >>> sequential(*ms, rule="pcr5").isclose(combine(*ms, rule="pcr5"))
+    False
+    """
+    info = get_rule(rule)
+    if len(sources) == 1 and isinstance(sources[0], (list, tuple)):
+        sources = tuple(sources[0])
+    if len(sources) < 2:
+        raise InvalidMassError(f"combination needs at least two sources, got {len(sources)}")
+    result = combine(sources[0], sources[1], rule=info, model=model, **options)
+    for source in sources[2:]:
+        if model is not None and isinstance(source, (MassFunction, MassBatch)) and source.model != model:
+            source = source.under(model)
+        result = combine(result, source, rule=info, **options)
+    return result
+
+
+# -- shared machinery ----------------------------------------------------------------------------
+def _values(batches: Sequence[MassBatch]) -> tuple[int, list[np.ndarray]]:
+    n = max(len(b) for b in batches)
+    return n, [b.values if len(b) == n else np.broadcast_to(b.values, (n, b.values.shape[1])) for b in batches]
+
+
+def _plan(batches: Sequence[MassBatch], model: Model) -> TuplePlan:
+    plan = tuple_plan(batches[0].model, model, tuple(b.focal for b in batches))
+    if plan.count > MAX_TUPLES:
+        raise InvalidMassError(
+            f"joint combination of {len(batches)} sources visits {plan.count:,} tuples of focal elements, "
+            f"more than {MAX_TUPLES:,}; use fewer focal elements or sources"
+        )
+    return plan
+
+
+def _require_normal(batches: Sequence[MassBatch], rule: str) -> None:
+    for k, b in enumerate(batches, start=1):
+        if b.empty_mass.any():
+            raise InvalidMassError(f"{rule} needs normal sources, but source {k} has mass on ∅; normalise it first")
+
+
+def _require_nonempty(plan: TuplePlan, rule: str) -> None:
+    for k, (orig, proj) in enumerate(zip(plan.focal, plan.projected), start=1):
+        for x, y in zip(orig, proj):
+            if x.terms and not y.terms:
+                raise ModelError(
+                    f"{rule} cannot give mass to {x} of source {k}, which is empty under the {plan.model.kind} "
+                    "fusion model; use dsmh for such dynamic fusion"
+                )
+
+
+@lru_cache(maxsize=512)
+def _scatter(plan: TuplePlan, key: str) -> Scatter:
+    return Scatter(_TARGETS[key](plan))
+
+
+def _tuple_targets_rule(batches: Sequence[MassBatch], model: Model, key: str) -> MassBatch:
+    """Rules that send each tuple's whole product to one element."""
+    plan = _plan(batches, model)
+    scatter = _scatter(plan, key)
+    n, values = _values(batches)
+    out = np.empty((n, len(scatter.elements)))
+    for rows in row_chunks(n, plan.count):
+        out[rows] = scatter.apply(plan.products([v[rows] for v in values], scatter.order))
+    return MassBatch._trusted(model, scatter.elements, out)
+
+
+def _fold(batches: Sequence[MassBatch], model: Model, key: str) -> MassBatch:
+    result = _tuple_targets_rule(batches[:2], model, key)
+    for b in batches[2:]:
+        result = _tuple_targets_rule([result, b.under(model) if b.model != model else b], model, key)
+    return result
+
+
+def _meet_targets(plan: TuplePlan) -> list[Element]:
+    return plan.meets
+
+
+def _join_targets(plan: TuplePlan) -> list[Element]:
+    return plan.joins
+
+
+def _dubois_prade_targets(plan: TuplePlan) -> list[Element]:
+    return [m if m.terms else j for m, j in zip(plan.meets, plan.joins)]
+
+
+def _hyper_union(element: Element) -> Element:
+    """u(X): the union of the hypotheses that appear in X (u(a∩b) = a ∪ b)."""
+    frame = element.frame
+    mask = element.hypotheses
+    return Element._make(frame, tuple(1 << i for i in range(len(frame)) if mask >> i & 1))
+
+
+def _dsmh_targets(plan: TuplePlan) -> list[Element]:
+    model = plan.model
+    targets = []
+    for t, meet, join in zip(plan.tuples, plan.meets, plan.joins):
+        if meet.terms:
+            targets.append(meet)                         # S1
+        elif join.terms:
+            targets.append(join)                         # S3
+        else:                                            # S2: every focal element vanished
+            u = model.frame.empty
+            for source, i in enumerate(t):
+                u = u | _hyper_union(plan.focal[source][i])
+            u = model.reduce(u)
+            targets.append(u if u.terms else model.total)
+    return targets
+
+
+_TARGETS: dict[str, Callable[[TuplePlan], list[Element]]] = {
+    "meet": _meet_targets,
+    "join": _join_targets,
+    "dubois_prade": _dubois_prade_targets,
+    "dsmh": _dsmh_targets,
+}
+
+
+def _move_empty(result: MassBatch, to: Element | None, model: Model, rule: str) -> MassBatch:
+    """Remove the ∅ column: renormalise (``to=None``, Dempster) or add it to ``to`` (Yager)."""
+    focal = list(result.focal)
+    if not any(not e.terms for e in focal):
+        return result
+    k = next(i for i, e in enumerate(focal) if not e.terms)
+    values = result.values
+    keep = [i for i in range(len(focal)) if i != k]
+    if to is None:
+        kept = values[:, keep]
+        scale = kept.sum(axis=1)
+        dead = ~(scale > 0)
+        if dead.any():
+            row = int(np.flatnonzero(dead)[0])
+            where = f" (row {row})" if len(values) > 1 else ""
+            raise TotalConflictError(f"{rule}: total conflict between the sources{where}, m(∅) = 1; "
+                                     "Dempster's rule is undefined (try yager, dubois_prade, dsmh or pcr6)")
+        return MassBatch._trusted(model, tuple(focal[i] for i in keep), kept / scale[:, None])
+    new_focal = [focal[i] for i in keep]
+    new_values = values[:, keep].copy()
+    if to in new_focal:
+        new_values[:, new_focal.index(to)] += values[:, k]
+    else:
+        new_focal.append(to)
+        new_values = np.hstack([new_values, values[:, k:k + 1]])
+    order = sorted(range(len(new_focal)), key=lambda i: new_focal[i].sort_key)
+    return MassBatch._trusted(model, tuple(new_focal[i] for i in order), new_values[:, order])
+
+
+# -- the rules ----------------------------------------------------------------------------------------
+@register_rule("conjunctive", summary="unnormalised conjunctive rule (Smets' TBM); conflict stays on ∅",
+               associative=True, keeps_conflict=True, aliases=("smets", "tbm", "unnormalized"))
+def conjunctive(sources: Sequence[MassBatch], model: Model) -> MassBatch:
+    """m(A) = Σ_{X_1∩…∩X_s=A} Π m_i(X_i), with the products of empty intersections on ∅ (W (2))."""
+    return _fold(sources, model, "meet")
+
+
+@register_rule("dsmc", summary="classic DSm rule: conjunctive on D^Θ (no conflict on the free model)",
+               associative=True, keeps_conflict=True, aliases=("dsm_classic",))
+def dsmc(sources: Sequence[MassBatch], model: Model) -> MassBatch:
+    """The classic DSm rule W (2): the conjunctive consensus on the hyper-power set.
+
+    On the free model no intersection is empty, so the result carries no conflict.  Under
+    a hybrid model (such as the tracking model of SPEC Part D, where it is the ``table``
+    rule) the products that land on an empty intersection stay on ∅.
+    """
+    return _fold(sources, model, "meet")
+
+
+@register_rule("dempster", summary="Dempster's rule: conjunctive, renormalised by 1 - conflict",
+               associative=True, aliases=("ds", "dempster_shafer"))
+def dempster(sources: Sequence[MassBatch], model: Model) -> MassBatch:
+    """m(A) = m∩(A) / Σ_{B≠∅} m∩(B) for A ≠ ∅ (SPEC A.3).
+
+    The denominator is the sum of the non-empty masses rather than 1 - K, so that a
+    conflict K close to one still yields masses that sum to one.
+    """
+    return _move_empty(_fold(sources, model, "meet"), None, model, "dempster")
+
+
+@register_rule("disjunctive", summary="disjunctive rule: products go to the union of the focal elements",
+               associative=True, aliases=("union",))
+def disjunctive(sources: Sequence[MassBatch], model: Model) -> MassBatch:
+    """m(A) = Σ_{X_1∪…∪X_s=A} Π m_i(X_i) (Dubois & Prade 1986; Smets 1993)."""
+    return _fold(sources, model, "join")
+
+
+@register_rule("yager", summary="Yager's rule: the conflict goes to total ignorance",
+               associative=False)
+def yager(sources: Sequence[MassBatch], model: Model) -> MassBatch:
+    """m(A) = m∩(A) for ∅ ≠ A ≠ Θ and m(Θ) = m∩(Θ) + m∩(∅) (Yager 1987)."""
+    _require_normal(sources, "yager")
+    return _move_empty(_fold(sources, model, "meet"), model.total, model, "yager")
+
+
+@register_rule("dubois_prade", summary="Dubois–Prade: each conflicting product goes to the union of its elements",
+               associative=False, aliases=("dp", "duboisprade"))
+def dubois_prade(sources: Sequence[MassBatch], model: Model) -> MassBatch:
+    """m(A) = Σ_{∩X_i=A} Π m_i(X_i) + Σ_{∩X_i=∅, ∪X_i=A} Π m_i(X_i), jointly over s sources.
+
+    Under dynamic fusion a product whose union is empty in the fusion model has no
+    element to go to; as the formula says, it stays on ∅ (DSmH places it instead).
+    """
+    _require_normal(sources, "dubois_prade")
+    return _tuple_targets_rule(sources, model, "dubois_prade")
+
+
+@register_rule("dsmh", summary="hybrid DSm rule (S1 + S2 + S3), static or dynamic",
+               associative=False, aliases=("hybrid", "dsm_hybrid"))
+def dsmh(sources: Sequence[MassBatch], model: Model) -> MassBatch:
+    """The hybrid DSm rule, m(A) = φ(A)[S1(A) + S2(A) + S3(A)], jointly over s sources.
+
+    Each tuple's product goes to its intersection if that is non-empty under the fusion
+    model (S1); else to the union of its elements (S3); and if every element of the tuple
+    is empty under the fusion model, to u(X_1) ∪ … ∪ u(X_s), where u(X) is the union of
+    the hypotheses that make up X, or to total ignorance if that is empty too (S2)
+    (Smarandache & Dezert, Advances and Applications of DSmT, vol. 1, ch. 4).
+    """
+    _require_normal(sources, "dsmh")
+    return _tuple_targets_rule(sources, model, "dsmh")
+
+
+def _pcr(sources: Sequence[MassBatch], model: Model, rule: str) -> MassBatch:
+    _require_normal(sources, rule)
+    plan = _plan(sources, model)
+    _require_nonempty(plan, rule)
+    scatter, entry_tuple, entry_slot = _pcr_scatter(plan, rule)
+    n, values = _values(sources)
+    s = len(sources)
+    out = np.empty((n, len(scatter.elements)))
+    for rows in row_chunks(n, plan.count * (s + 1)):
+        chunk = [v[rows] for v in values]
+        masses = plan.source_masses(chunk)                      # (n, T, s)
+        product = masses.prod(axis=2)                            # (n, T)
+        if rule == "pcr6":
+            weights = masses
+        else:
+            weights = _pcr5_group_products(plan, masses)
+        total = weights.sum(axis=2)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            share = np.where(total[:, :, None] > 0, weights / total[:, :, None], 0.0)
+        # Slot s stands for the tuple's own intersection (consensus tuples), with factor 1.
+        factors = np.concatenate([share, np.ones(share.shape[:2] + (1,))], axis=2)
+        contributions = product[:, entry_tuple] * factors[:, entry_tuple, entry_slot]
+        out[rows] = scatter.apply(contributions)
+    return MassBatch._trusted(model, scatter.elements, out)
+
+
+def _pcr5_group_products(plan: TuplePlan, masses: np.ndarray) -> np.ndarray:
+    """For each tuple, the product of the masses of each group of sources that chose the same element,
+    placed on the group's first source (other slots 0), shape (n, T, s)."""
+    representative = _representatives(plan)
+    weights = np.zeros_like(masses)
+    s = masses.shape[2]
+    for j in range(s):
+        group = representative == j                              # (T, s): slots that belong to the group of j
+        if not group.any():
+            continue
+        factor = np.where(group[None, :, :], masses, 1.0).prod(axis=2)
+        weights[:, :, j] = np.where(group[:, j][None, :], factor, 0.0)
+    return weights
+
+
+@lru_cache(maxsize=512)
+def _representatives(plan: TuplePlan) -> np.ndarray:
+    """rep[t, i]: the first source of tuple t whose (projected) focal element equals source i's."""
+    s = len(plan.focal)
+    rep = np.empty((plan.count, s), dtype=np.int64)
+    for t, combo in enumerate(plan.tuples):
+        elements = [plan.projected[i][c] for i, c in enumerate(combo)]
+        for i, e in enumerate(elements):
+            rep[t, i] = elements.index(e)
+    return rep
+
+
+@lru_cache(maxsize=512)
+def _pcr_scatter(plan: TuplePlan, rule: str) -> tuple[Scatter, np.ndarray, np.ndarray]:
+    """Entries (tuple, slot) and their targets: slot s = the tuple's intersection; slot i = source i's element."""
+    s = len(plan.focal)
+    entries: list[tuple[int, int]] = []
+    targets: list[Element] = []
+    rep = _representatives(plan) if rule == "pcr5" else None
+    for t, combo in enumerate(plan.tuples):
+        if not plan.conflicting[t]:
+            entries.append((t, s))
+            targets.append(plan.meets[t])
+            continue
+        for i, c in enumerate(combo):
+            if rep is not None and rep[t, i] != i:
+                continue
+            entries.append((t, i))
+            targets.append(plan.projected[i][c])
+    scatter = Scatter(targets)
+    tuples = np.array([e[0] for e in entries], dtype=np.int64)[scatter.order]
+    slots = np.array([e[1] for e in entries], dtype=np.int64)[scatter.order]
+    return scatter, tuples, slots
+
+
+@register_rule("pcr5", summary="PCR5: conflicting products go back to the elements involved, by mass products",
+               associative=False)
+def pcr5(sources: Sequence[MassBatch], model: Model) -> MassBatch:
+    """Proportional conflict redistribution rule no. 5, joint s-source form.
+
+    Each conflicting product Π m_i(X_i) is shared among the distinct elements of the
+    tuple in proportion to the product of the masses that the sources committed to each:
+    element Y gets Π m_i(X_i) · P_Y / Σ_Z P_Z with P_Y = Π_{i: X_i = Y} m_i(Y).  This is
+    the general PCR5 formula of Smarandache & Dezert (Advances and Applications of DSmT,
+    vol. 2, ch. 1, 2006), in the focal-element form of Dezert, Dezert & Smarandache
+    (JAIF 2021, eq. 14); for two sources it reduces to SPEC A.3.
+    """
+    return _pcr(sources, model, "pcr5")
+
+
+@register_rule("pcr6", summary="PCR6: each source's element gets back a share proportional to its mass",
+               associative=False)
+def pcr6(sources: Sequence[MassBatch], model: Model) -> MassBatch:
+    """Proportional conflict redistribution rule no. 6 (Martin & Osswald, 2006), joint s-source form.
+
+    Each conflicting product Π m_i(X_i) goes back to every X_i in proportion to m_i(X_i):
+    X_i gets Π_j m_j(X_j) · m_i(X_i) / Σ_j m_j(X_j); shares reaching the same element add
+    up (Dezert & Smarandache, An introduction to DSmT, 2009, eqs. 16–17).  Equals PCR5
+    for two sources.
+    """
+    return _pcr(sources, model, "pcr6")
+
+
+# -- the R-weighted rule (SPEC A.4) ----------------------------------------------------------------
+R_MODES = ("paper", "euclid", "jousselme")
+EMPTY_MODES = ("union", "empty")
+
+
+@register_rule("r_rule", summary="R-weighted local-conflict rule of the DSmT tracking paper, folded in source order",
+               associative=False, keeps_conflict=True, aliases=("r", "rrule", "wang"),
+               options=("r_mode", "empty_mode"))
+def r_rule(sources: Sequence[MassBatch], model: Model, r_mode: str = "paper", empty_mode: str = "union") -> MassBatch:
+    """The R-weighted conflict rule of SPEC A.4 (W (10)–(14) with the missing W (12′)).
+
+    Two sources: the inconsistency R ∈ [0, 1] (W (10); ``r_mode`` "paper" as printed,
+    "euclid", or "jousselme") splits each local conflict k of a pair {A, B} (W (11)):
+    R·k stays on A ∩ B (W (14)), or, when A ∩ B is empty under the model, goes to A ∪ B
+    (``empty_mode="union"``) or to ∅ (``"empty"``); (1 - R)·k goes to A, B and A ∪ B in
+    proportion to m0, Dempster's combination of the sources' Shafer projections (W (12),
+    (12′), (13)).  More sources are folded in the given order: the rule is not associative.
+    """
+    if r_mode not in R_MODES:
+        raise InvalidMassError(f"r_mode must be one of {', '.join(R_MODES)}, got {r_mode!r}")
+    if empty_mode not in EMPTY_MODES:
+        raise InvalidMassError(f"empty_mode must be one of {', '.join(EMPTY_MODES)}, got {empty_mode!r}")
+    if sources[0].empty_mass.any():
+        raise InvalidMassError("r_rule needs normal sources, but source 1 has mass on ∅; normalise it first")
+    result = sources[0]
+    for k, b in enumerate(sources[1:], start=2):
+        if b.empty_mass.any():
+            raise InvalidMassError(f"r_rule needs normal sources, but source {k} has mass on ∅; normalise it first")
+        result = _r_pair(result, b, model, r_mode, empty_mode)
+    return result
+
+
+def _shafer_projection(element: Element) -> int:
+    """π0(X) as a bit mask of hypotheses: the singleton regions of X (SPEC A.2)."""
+    mask = 0
+    for t in element.terms:
+        if t.bit_count() == 1:
+            mask |= t
+    return mask
+
+
+@dataclass(frozen=True, eq=False)
+class _RPlan:
+    scatter: Scatter              # targets of [consensus tuples | 4 entries per conflict pair]
+    consensus: np.ndarray         # tuple indices of consensus entries, shape (T_c,)
+    pair_of_tuple: np.ndarray     # conflict-pair index of every tuple, -1 for consensus, shape (T,)
+    n_pairs: int
+    m0_of_tuple: np.ndarray       # index of π0(X)∩π0(Y) in the m0 support, -1 if empty, shape (T,)
+    n_m0: int
+    m0_index: np.ndarray          # (C, 3): m0 support index of π0(A), π0(B), π0(A∪B), or -1
+    support: tuple[np.ndarray, np.ndarray]  # (C, 3) columns of A, B, A∪B in source 1 and 2 (-1 if absent)
+    meet_empty: np.ndarray        # (C,) True when A ∩ B is empty under the model
+    aligned: tuple[np.ndarray, np.ndarray]  # columns of the union of focal elements in each source (-1 if absent)
+    union_focal: tuple[Element, ...]
+
+
+@lru_cache(maxsize=512)
+def _r_plan(plan: TuplePlan, empty_mode: str) -> _RPlan:
+    model = plan.model
+    first, second = plan.projected
+    pairs: dict[frozenset, int] = {}
+    pair_elements: list[tuple[Element, Element]] = []
+    pair_of_tuple = np.full(plan.count, -1, dtype=np.int64)
+    consensus: list[int] = []
+    consensus_targets: list[Element] = []
+    m0_keys: dict[int, int] = {}
+    m0_of_tuple = np.full(plan.count, -1, dtype=np.int64)
+    for t, (i, j) in enumerate(plan.tuples):
+        x, y, z = first[i], second[j], plan.meets[t]
+        px, py = _shafer_projection(x), _shafer_projection(y)
+        if px & py:
+            m0_of_tuple[t] = m0_keys.setdefault(px & py, len(m0_keys))
+        if not x.terms or not y.terms:
+            is_conflict = False                      # ∅ carried by a running result stays on ∅
+        elif not z.terms:
+            is_conflict = True
+        elif x <= y or y <= x:
+            is_conflict = False
+        else:
+            is_conflict = bool(px and py and not px & py)   # paradox: distinct singletons that may overlap
+        if is_conflict:
+            key = frozenset((x, y))
+            if key not in pairs:
+                pairs[key] = len(pairs)
+                pair_elements.append((x, y))
+            pair_of_tuple[t] = pairs[key]
+        else:
+            consensus.append(t)
+            consensus_targets.append(z)
+    targets = list(consensus_targets)
+    m0_index = np.full((len(pairs), 3), -1, dtype=np.int64)
+    columns1 = {e: c for c, e in enumerate(first)}
+    columns2 = {e: c for c, e in enumerate(second)}
+    support1 = np.full((len(pairs), 3), -1, dtype=np.int64)
+    support2 = np.full((len(pairs), 3), -1, dtype=np.int64)
+    meet_empty = np.zeros(len(pairs), dtype=bool)
+    for c, (a, b) in enumerate(pair_elements):
+        union = model.reduce(a | b)
+        meet = model.reduce(a & b)
+        meet_empty[c] = not meet.terms
+        if meet.terms:
+            kept = meet
+        else:
+            kept = union if empty_mode == "union" else model.frame.empty
+        targets.extend([kept, a, b, union])
+        for slot, e in enumerate((a, b, union)):
+            p = _shafer_projection(e)
+            m0_index[c, slot] = m0_keys.get(p, -1) if p else -1
+            support1[c, slot] = columns1.get(e, -1)
+            support2[c, slot] = columns2.get(e, -1)
+    union_focal = tuple(sorted(set(first) | set(second), key=lambda e: e.sort_key))
+    aligned = (np.array([columns1.get(e, -1) for e in union_focal], dtype=np.int64),
+               np.array([columns2.get(e, -1) for e in union_focal], dtype=np.int64))
+    return _RPlan(Scatter(targets), np.array(consensus, dtype=np.int64), pair_of_tuple, len(pairs),
+                  m0_of_tuple, len(m0_keys), m0_index, (support1, support2), meet_empty, aligned, union_focal)
+
+
+def _gather(values: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    """values[:, columns] with 0 where a column is -1."""
+    padded = np.concatenate([values, np.zeros((values.shape[0], 1))], axis=1)
+    return padded[:, np.where(columns < 0, values.shape[1], columns)]
+
+
+def _sum_by(values: np.ndarray, codes: np.ndarray, size: int) -> np.ndarray:
+    """out[:, k] = Σ_{t: codes[t]=k} values[:, t] (codes -1 ignored), shape (N, size)."""
+    out = np.zeros((values.shape[0], size))
+    for k in range(size):
+        pick = codes == k
+        if pick.any():
+            out[:, k] = values[:, pick].sum(axis=1)
+    return out
+
+
+def inconsistency(m1: np.ndarray, m2: np.ndarray, focal: Sequence[Element], model: Model,
+                  r_mode: str = "paper") -> np.ndarray:
+    """The inconsistency R of W (10) between rows of two aligned arrays, shape (N,).
+
+    ``paper``: R = sqrt(Σ_A |m1(A) - m2(A)| / 2) as printed; ``euclid``:
+    sqrt(½ Σ_A (m1(A) - m2(A))²); ``jousselme``: sqrt(½ Δᵀ D Δ) with D_AB = C(A∩B)/C(A∪B).
+    """
+    delta = m1 - m2
+    if r_mode == "paper":
+        value = np.abs(delta).sum(axis=1) / 2.0
+    elif r_mode == "euclid":
+        value = 0.5 * (delta * delta).sum(axis=1)
+    else:
+        matrix = _jousselme_matrix(model, tuple(focal))
+        value = 0.5 * np.einsum("na,ab,nb->n", delta, matrix, delta)
+    return np.sqrt(np.clip(value, 0.0, 1.0))
+
+
+@lru_cache(maxsize=256)
+def _jousselme_matrix(model: Model, focal: tuple[Element, ...]) -> np.ndarray:
+    size = len(focal)
+    matrix = np.zeros((size, size))
+    for a in range(size):
+        for b in range(size):
+            union = model.cardinality(focal[a] | focal[b])
+            matrix[a, b] = model.cardinality(focal[a] & focal[b]) / union if union else 0.0
+    return matrix
+
+
+def _r_pair(b1: MassBatch, b2: MassBatch, model: Model, r_mode: str, empty_mode: str) -> MassBatch:
+    if b2.model != model:
+        b2 = b2.under(model)
+    plan = _plan([b1, b2], model)
+    _require_nonempty(plan, "r_rule")
+    rp = _r_plan(plan, empty_mode)
+    n, (v1, v2) = _values([b1, b2])
+    product = plan.products([v1, v2])                                     # (N, T)
+    r = inconsistency(_gather(v1, rp.aligned[0]), _gather(v2, rp.aligned[1]), rp.union_focal, model, r_mode)
+    k = _sum_by(product, rp.pair_of_tuple, rp.n_pairs)                    # (N, C)  W (11)
+    m0 = _sum_by(product, rp.m0_of_tuple, rp.n_m0)                        # (N, P)  unnormalised m0
+    weights = _gather(m0, rp.m0_index.reshape(-1)).reshape(n, rp.n_pairs, 3)
+    total = weights.sum(axis=2)
+    fallback = ~(total > 0)
+    if fallback.any():
+        # SPEC A.4: weight by the sources' own support of A, B and A ∪ B; failing that, all to A ∪ B.
+        support = (_gather(v1, rp.support[0].reshape(-1)) + _gather(v2, rp.support[1].reshape(-1))).reshape(
+            n, rp.n_pairs, 3)
+        weights = np.where(fallback[:, :, None], support, weights)
+        total = weights.sum(axis=2)
+        still = ~(total > 0)
+        if still.any():
+            weights = np.where(still[:, :, None], np.array([0.0, 0.0, 1.0]), weights)
+            total = weights.sum(axis=2)
+    shares = (1.0 - r)[:, None, None] * k[:, :, None] * weights / total[:, :, None]   # W (12), (12′), (13)
+    kept = r[:, None] * k                                                              # W (14)
+    pair_entries = np.concatenate([kept[:, :, None], shares], axis=2).reshape(n, 4 * rp.n_pairs)
+    contributions = np.concatenate([product[:, rp.consensus], pair_entries], axis=1)
+    out = rp.scatter.apply(contributions[:, rp.scatter.order])
+    return MassBatch._trusted(model, rp.scatter.elements, out)
