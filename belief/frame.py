@@ -162,6 +162,10 @@ class Frame:
     def __hash__(self) -> int:
         return self._hash
 
+    def __reduce__(self):
+        # Rebuild on unpickling: string hashes differ between interpreter runs.
+        return (Frame, (list(self._names),))
+
     def __repr__(self) -> str:
         return f"Frame({list(self._names)!r})"
 

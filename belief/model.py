@@ -139,6 +139,10 @@ class Model:
     def __hash__(self) -> int:
         return self._hash
 
+    def __reduce__(self):
+        # Rebuild on unpickling: the cached hash depends on the interpreter run.
+        return (_restore_model, (self.frame, self.forbidden, self.kind, self.false_alarm))
+
     def __repr__(self) -> str:
         if self.kind in ("free", "shafer"):
             return f"Model.{self.kind}({self.frame!r})"
@@ -260,6 +264,10 @@ class Model:
                 raise FormatError("\"false_alarm\" must be a hypothesis name")
             return cls.tracking(frame, fa)
         raise FormatError(f"unknown model type {kind!r}; known types: {', '.join(_KINDS)}")
+
+
+def _restore_model(frame: Frame, forbidden: tuple[int, ...], kind: str, false_alarm: str | None) -> Model:
+    return Model(frame, forbidden, kind=kind, false_alarm=false_alarm)
 
 
 def check_same_frame(*frames: Frame) -> None:

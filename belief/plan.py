@@ -27,7 +27,7 @@ __all__ = ["TuplePlan", "Scatter", "tuple_plan", "MAX_TUPLES"]
 #: Refuse joint combinations with more focal-element tuples than this.
 MAX_TUPLES = 20_000_000
 #: Rows are processed in chunks of about this many (row × tuple) entries, to bound memory.
-CHUNK_ENTRIES = 1 << 20
+CHUNK_ENTRIES = 1 << 19
 
 
 class Scatter:
@@ -136,14 +136,15 @@ class TuplePlan:
     def products(self, values: Sequence[np.ndarray], order: np.ndarray | None = None) -> np.ndarray:
         """Π_i m_i(X_i) for every tuple (optionally in ``order``); values[i] has shape (N, K_i)."""
         columns = self.columns if order is None else tuple(c[order] for c in self.columns)
-        result = values[0][:, columns[0]]
-        for v, c in zip(values[1:], columns[1:]):
-            result *= v[:, c]
-        return result
+        return gather_product(values, columns)
 
-    def source_masses(self, values: Sequence[np.ndarray]) -> np.ndarray:
-        """m_i(X_i) of every tuple and source, shape (N, T, s)."""
-        return np.stack([v[:, c] for v, c in zip(values, self.columns)], axis=2)
+
+def gather_product(values: Sequence[np.ndarray], columns: Sequence[np.ndarray]) -> np.ndarray:
+    """Π_i values[i][:, columns[i]], shape (N, len(columns[0]))."""
+    result = np.take(values[0], columns[0], axis=1)
+    for v, c in zip(values[1:], columns[1:]):
+        result *= np.take(v, c, axis=1)
+    return result
 
 
 @lru_cache(maxsize=512)

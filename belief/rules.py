@@ -32,7 +32,7 @@ from belief.errors import BeliefError, FrameError, InvalidMassError, ModelError,
 from belief.frame import Element
 from belief.mass import MassFunction
 from belief.model import Model
-from belief.plan import MAX_TUPLES, Scatter, TuplePlan, row_chunks, tuple_plan
+from belief.plan import MAX_TUPLES, Scatter, TuplePlan, gather_product, row_chunks, tuple_plan
 
 __all__ = ["combine", "sequential", "RULES", "RuleInfo", "get_rule", "register_rule", "rule_names",
            "UnknownRuleError"]
@@ -259,25 +259,35 @@ def _require_nonempty(plan: TuplePlan, rule: str) -> None:
 
 
 @lru_cache(maxsize=512)
-def _scatter(plan: TuplePlan, key: str) -> Scatter:
-    return Scatter(_TARGETS[key](plan))
+def _kernel(plan: TuplePlan, key: str) -> tuple[Scatter, tuple[np.ndarray, ...]]:
+    """The scatter of a one-target-per-tuple rule, and each source's columns in scatter order."""
+    scatter = Scatter(_TARGETS[key](plan))
+    return scatter, tuple(c[scatter.order] for c in plan.columns)
 
 
 def _tuple_targets_rule(batches: Sequence[MassBatch], model: Model, key: str) -> MassBatch:
     """Rules that send each tuple's whole product to one element."""
     plan = _plan(batches, model)
-    scatter = _scatter(plan, key)
+    scatter, columns = _kernel(plan, key)
     n, values = _values(batches)
     out = np.empty((n, len(scatter.elements)))
     for rows in row_chunks(n, plan.count):
-        out[rows] = scatter.apply(plan.products([v[rows] for v in values], scatter.order))
+        out[rows] = scatter.apply(gather_product([v[rows] for v in values], columns))
     return MassBatch._trusted(model, scatter.elements, out)
 
 
+def _prune(batch: MassBatch) -> MassBatch:
+    """Drop the columns that are zero in every row (they would only widen the next fold)."""
+    live = np.flatnonzero((batch.values != 0).any(axis=0))
+    if live.size == len(batch.focal):
+        return batch
+    return MassBatch._trusted(batch.model, tuple(batch.focal[i] for i in live.tolist()), batch.values[:, live])
+
+
 def _fold(batches: Sequence[MassBatch], model: Model, key: str) -> MassBatch:
-    result = _tuple_targets_rule(batches[:2], model, key)
+    result = _prune(_tuple_targets_rule(batches[:2], model, key))
     for b in batches[2:]:
-        result = _tuple_targets_rule([result, b.under(model) if b.model != model else b], model, key)
+        result = _prune(_tuple_targets_rule([result, b.under(model) if b.model != model else b], model, key))
     return result
 
 
@@ -428,44 +438,72 @@ def dsmh(sources: Sequence[MassBatch], model: Model) -> MassBatch:
 
 
 def _pcr(sources: Sequence[MassBatch], model: Model, rule: str) -> MassBatch:
+    """Consensus (the conjunctive rule without ∅) plus the redistribution of every conflicting tuple."""
     _require_normal(sources, rule)
     plan = _plan(sources, model)
     _require_nonempty(plan, rule)
-    scatter, entry_tuple, entry_slot = _pcr_scatter(plan, rule)
+    consensus = _fold(sources, model, "meet")
+    scatter, columns, positions, representative = _pcr_kernel(plan, rule)
     n, values = _values(sources)
     s = len(sources)
-    out = np.empty((n, len(scatter.elements)))
-    for rows in row_chunks(n, plan.count * (s + 1)):
-        chunk = [v[rows] for v in values]
-        masses = plan.source_masses(chunk)                      # (n, T, s)
-        product = masses.prod(axis=2)                            # (n, T)
-        if rule == "pcr6":
+    count = len(columns[0])
+    shares = np.empty((n, len(scatter.elements)))
+    for rows in row_chunks(n, count * (s + 2)):
+        masses = [np.take(v[rows], c, axis=1) for v, c in zip(values, columns)]      # each (n, Tc)
+        product = masses[0].copy()
+        for m in masses[1:]:
+            product *= m
+        if representative is None:                      # PCR6: weight m_i(X_i)
             weights = masses
-        else:
-            weights = _pcr5_group_products(plan, masses)
-        total = weights.sum(axis=2)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            share = np.where(total[:, :, None] > 0, weights / total[:, :, None], 0.0)
-        # Slot s stands for the tuple's own intersection (consensus tuples), with factor 1.
-        factors = np.concatenate([share, np.ones(share.shape[:2] + (1,))], axis=2)
-        contributions = product[:, entry_tuple] * factors[:, entry_tuple, entry_slot]
-        out[rows] = scatter.apply(contributions)
-    return MassBatch._trusted(model, scatter.elements, out)
+        else:                                           # PCR5: product of each group's masses, on its first slot
+            weights = []
+            for j in range(s):
+                w = np.broadcast_to((representative[:, j] == j).astype(np.float64), product.shape).copy()
+                for i in range(j, s):
+                    member = representative[:, i] == j
+                    if member.any():
+                        w[:, member] *= masses[i][:, member]
+                weights.append(w)
+        total = weights[0].copy()
+        for w in weights[1:]:
+            total += w
+        factor = np.divide(product, total, out=np.zeros_like(product), where=total > 0)
+        entries = np.empty((product.shape[0], count * s))
+        for i in range(s):
+            entries[:, positions[i]] = factor * weights[i]
+        shares[rows] = scatter.apply(entries)
+    return _add(model, consensus, scatter.elements, shares)
 
 
-def _pcr5_group_products(plan: TuplePlan, masses: np.ndarray) -> np.ndarray:
-    """For each tuple, the product of the masses of each group of sources that chose the same element,
-    placed on the group's first source (other slots 0), shape (n, T, s)."""
-    representative = _representatives(plan)
-    weights = np.zeros_like(masses)
-    s = masses.shape[2]
-    for j in range(s):
-        group = representative == j                              # (T, s): slots that belong to the group of j
-        if not group.any():
-            continue
-        factor = np.where(group[None, :, :], masses, 1.0).prod(axis=2)
-        weights[:, :, j] = np.where(group[:, j][None, :], factor, 0.0)
-    return weights
+def _add(model: Model, base: MassBatch, elements: Sequence[Element], values: np.ndarray) -> MassBatch:
+    """``base`` without its ∅ column, plus ``values`` over ``elements``, as one batch."""
+    keep = [i for i, e in enumerate(base.focal) if e.terms]
+    focal = sorted({base.focal[i] for i in keep} | set(elements), key=lambda e: e.sort_key)
+    index = {e: k for k, e in enumerate(focal)}
+    out = np.zeros((max(len(base), len(values)), len(focal)))
+    out[:, [index[base.focal[i]] for i in keep]] += base.values[:, keep]
+    out[:, [index[e] for e in elements]] += values
+    return MassBatch._trusted(model, tuple(focal), out)
+
+
+@lru_cache(maxsize=512)
+def _pcr_kernel(plan: TuplePlan, rule: str):
+    """Tables for redistributing the conflicting tuples.
+
+    Returns the scatter over (conflicting tuple, slot) entries, the sources' columns at the
+    conflicting tuples, the positions of each slot's entries in scatter order, and (PCR5)
+    the group representative of every slot.
+    """
+    s = len(plan.focal)
+    conflict = np.flatnonzero(plan.conflicting)
+    columns = tuple(c[conflict] for c in plan.columns)
+    targets = [plan.projected[i][int(columns[i][t])] for i in range(s) for t in range(conflict.size)]
+    scatter = Scatter(targets)
+    rank = np.empty(len(targets), dtype=np.int64)
+    rank[scatter.order] = np.arange(len(targets))
+    positions = tuple(rank[i * conflict.size:(i + 1) * conflict.size] for i in range(s))
+    representative = _representatives(plan)[conflict] if rule == "pcr5" else None
+    return scatter, columns, positions, representative
 
 
 @lru_cache(maxsize=512)
@@ -480,27 +518,6 @@ def _representatives(plan: TuplePlan) -> np.ndarray:
     return rep
 
 
-@lru_cache(maxsize=512)
-def _pcr_scatter(plan: TuplePlan, rule: str) -> tuple[Scatter, np.ndarray, np.ndarray]:
-    """Entries (tuple, slot) and their targets: slot s = the tuple's intersection; slot i = source i's element."""
-    s = len(plan.focal)
-    entries: list[tuple[int, int]] = []
-    targets: list[Element] = []
-    rep = _representatives(plan) if rule == "pcr5" else None
-    for t, combo in enumerate(plan.tuples):
-        if not plan.conflicting[t]:
-            entries.append((t, s))
-            targets.append(plan.meets[t])
-            continue
-        for i, c in enumerate(combo):
-            if rep is not None and rep[t, i] != i:
-                continue
-            entries.append((t, i))
-            targets.append(plan.projected[i][c])
-    scatter = Scatter(targets)
-    tuples = np.array([e[0] for e in entries], dtype=np.int64)[scatter.order]
-    slots = np.array([e[1] for e in entries], dtype=np.int64)[scatter.order]
-    return scatter, tuples, slots
 
 
 @register_rule("pcr5", summary="PCR5: conflicting products go back to the elements involved, by mass products",
