@@ -27,7 +27,7 @@ __all__ = ["TuplePlan", "Scatter", "tuple_plan", "MAX_TUPLES"]
 #: Refuse joint combinations with more focal-element tuples than this.
 MAX_TUPLES = 20_000_000
 #: Rows are processed in chunks of about this many (row × tuple) entries, to bound memory.
-CHUNK_ENTRIES = 1 << 19
+CHUNK_ENTRIES = 1 << 18
 
 
 class Scatter:

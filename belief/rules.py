@@ -591,35 +591,48 @@ def _shafer_projection(element: Element) -> int:
 
 @dataclass(frozen=True, eq=False)
 class _RPlan:
-    scatter: Scatter              # targets of [consensus tuples | 4 entries per conflict pair]
-    consensus: np.ndarray         # tuple indices of consensus entries, shape (T_c,)
-    pair_of_tuple: np.ndarray     # conflict-pair index of every tuple, -1 for consensus, shape (T,)
-    n_pairs: int
-    m0_of_tuple: np.ndarray       # index of π0(X)∩π0(Y) in the m0 support, -1 if empty, shape (T,)
-    n_m0: int
-    m0_index: np.ndarray          # (C, 3): m0 support index of π0(A), π0(B), π0(A∪B), or -1
-    support: tuple[np.ndarray, np.ndarray]  # (C, 3) columns of A, B, A∪B in source 1 and 2 (-1 if absent)
-    meet_empty: np.ndarray        # (C,) True when A ∩ B is empty under the model
-    aligned: tuple[np.ndarray, np.ndarray]  # columns of the union of focal elements in each source (-1 if absent)
+    """Index tables of the R-weighted rule for one pair of focal-element lists."""
+
+    consensus: tuple[np.ndarray, np.ndarray]   # source columns of consensus tuples, sorted by target
+    consensus_scatter: Scatter
+    conflict: tuple[np.ndarray, np.ndarray]    # source columns of conflicting tuples, sorted by pair
+    pair_starts: np.ndarray                    # where each pair's run starts, shape (C,)
+    projection: tuple[np.ndarray, np.ndarray]  # tuples whose Shafer projections meet, sorted by that meet
+    projection_starts: np.ndarray              # shape (P,)
+    m0_index: np.ndarray                       # (C, 3): m0 column of π0(A), π0(B), π0(A∪B), or P if none
+    support: tuple[np.ndarray, np.ndarray]     # (C, 3): columns of A, B, A∪B in each source, or K_i if absent
+    pair_scatter: Scatter                      # targets of the entries [kept, A, B, A∪B] of every pair
+    pair_positions: tuple[np.ndarray, ...]     # four (C,) arrays: where each slot's entries sit in scatter order
+    aligned: tuple[np.ndarray, np.ndarray]     # columns of the union of focal elements in each source, or K_i
     union_focal: tuple[Element, ...]
+
+
+def _grouped(codes: list[int], columns: tuple[np.ndarray, ...]):
+    """Columns sorted by code, and the start of each code's run."""
+    codes_array = np.array(codes, dtype=np.int64)
+    order = np.argsort(codes_array, kind="stable")
+    sorted_codes = codes_array[order]
+    starts = np.flatnonzero(np.r_[True, sorted_codes[1:] != sorted_codes[:-1]]) if len(codes) else np.zeros(0, np.int64)
+    return tuple(c[order] for c in columns), starts
 
 
 @lru_cache(maxsize=512)
 def _r_plan(plan: TuplePlan, empty_mode: str) -> _RPlan:
     model = plan.model
     first, second = plan.projected
+    c1, c2 = plan.columns
     pairs: dict[frozenset, int] = {}
     pair_elements: list[tuple[Element, Element]] = []
-    pair_of_tuple = np.full(plan.count, -1, dtype=np.int64)
-    consensus: list[int] = []
-    consensus_targets: list[Element] = []
-    m0_keys: dict[int, int] = {}
-    m0_of_tuple = np.full(plan.count, -1, dtype=np.int64)
+    consensus, consensus_targets = [], []
+    conflict, conflict_pair = [], []
+    projected, projected_key = [], []
+    keys: dict[int, int] = {}
     for t, (i, j) in enumerate(plan.tuples):
         x, y, z = first[i], second[j], plan.meets[t]
         px, py = _shafer_projection(x), _shafer_projection(y)
         if px & py:
-            m0_of_tuple[t] = m0_keys.setdefault(px & py, len(m0_keys))
+            projected.append(t)
+            projected_key.append(keys.setdefault(px & py, len(keys)))
         if not x.terms or not y.terms:
             is_conflict = False                      # ∅ carried by a running result stays on ∅
         elif not z.terms:
@@ -633,52 +646,43 @@ def _r_plan(plan: TuplePlan, empty_mode: str) -> _RPlan:
             if key not in pairs:
                 pairs[key] = len(pairs)
                 pair_elements.append((x, y))
-            pair_of_tuple[t] = pairs[key]
+            conflict.append(t)
+            conflict_pair.append(pairs[key])
         else:
             consensus.append(t)
             consensus_targets.append(z)
-    targets = list(consensus_targets)
-    m0_index = np.full((len(pairs), 3), -1, dtype=np.int64)
+    consensus_scatter = Scatter(consensus_targets)
+    cons = np.array(consensus, dtype=np.int64)[consensus_scatter.order]
+    conflict_columns, pair_starts = _grouped(conflict_pair, (c1[conflict], c2[conflict]))
+    projection_columns, projection_starts = _grouped(projected_key, (c1[projected], c2[projected]))
+    n_pairs = len(pairs)
+    m0_index = np.full((n_pairs, 3), len(keys), dtype=np.int64)
     columns1 = {e: c for c, e in enumerate(first)}
     columns2 = {e: c for c, e in enumerate(second)}
-    support1 = np.full((len(pairs), 3), -1, dtype=np.int64)
-    support2 = np.full((len(pairs), 3), -1, dtype=np.int64)
-    meet_empty = np.zeros(len(pairs), dtype=bool)
+    support1 = np.full((n_pairs, 3), len(first), dtype=np.int64)
+    support2 = np.full((n_pairs, 3), len(second), dtype=np.int64)
+    slot_targets: list[list[Element]] = [[], [], [], []]
     for c, (a, b) in enumerate(pair_elements):
         union = model.reduce(a | b)
         meet = model.reduce(a & b)
-        meet_empty[c] = not meet.terms
-        if meet.terms:
-            kept = meet
-        else:
-            kept = union if empty_mode == "union" else model.frame.empty
-        targets.extend([kept, a, b, union])
+        kept = meet if meet.terms else (union if empty_mode == "union" else model.frame.empty)
+        for slot, e in enumerate((kept, a, b, union)):
+            slot_targets[slot].append(e)
         for slot, e in enumerate((a, b, union)):
             p = _shafer_projection(e)
-            m0_index[c, slot] = m0_keys.get(p, -1) if p else -1
-            support1[c, slot] = columns1.get(e, -1)
-            support2[c, slot] = columns2.get(e, -1)
+            if p in keys:
+                m0_index[c, slot] = keys[p]
+            support1[c, slot] = columns1.get(e, len(first))
+            support2[c, slot] = columns2.get(e, len(second))
+    pair_scatter = Scatter([e for slot in slot_targets for e in slot])
+    rank = np.empty(4 * n_pairs, dtype=np.int64)
+    rank[pair_scatter.order] = np.arange(4 * n_pairs)
+    positions = tuple(rank[slot * n_pairs:(slot + 1) * n_pairs] for slot in range(4))
     union_focal = tuple(sorted(set(first) | set(second), key=lambda e: e.sort_key))
-    aligned = (np.array([columns1.get(e, -1) for e in union_focal], dtype=np.int64),
-               np.array([columns2.get(e, -1) for e in union_focal], dtype=np.int64))
-    return _RPlan(Scatter(targets), np.array(consensus, dtype=np.int64), pair_of_tuple, len(pairs),
-                  m0_of_tuple, len(m0_keys), m0_index, (support1, support2), meet_empty, aligned, union_focal)
-
-
-def _gather(values: np.ndarray, columns: np.ndarray) -> np.ndarray:
-    """values[:, columns] with 0 where a column is -1."""
-    padded = np.concatenate([values, np.zeros((values.shape[0], 1))], axis=1)
-    return padded[:, np.where(columns < 0, values.shape[1], columns)]
-
-
-def _sum_by(values: np.ndarray, codes: np.ndarray, size: int) -> np.ndarray:
-    """out[:, k] = Σ_{t: codes[t]=k} values[:, t] (codes -1 ignored), shape (N, size)."""
-    out = np.zeros((values.shape[0], size))
-    for k in range(size):
-        pick = codes == k
-        if pick.any():
-            out[:, k] = values[:, pick].sum(axis=1)
-    return out
+    aligned = (np.array([columns1.get(e, len(first)) for e in union_focal], dtype=np.int64),
+               np.array([columns2.get(e, len(second)) for e in union_focal], dtype=np.int64))
+    return _RPlan((c1[cons], c2[cons]), consensus_scatter, conflict_columns, pair_starts, projection_columns,
+                  projection_starts, m0_index, (support1, support2), pair_scatter, positions, aligned, union_focal)
 
 
 def inconsistency(m1: np.ndarray, m2: np.ndarray, focal: Sequence[Element], model: Model,
@@ -710,6 +714,11 @@ def _jousselme_matrix(model: Model, focal: tuple[Element, ...]) -> np.ndarray:
     return matrix
 
 
+def _padded(values: np.ndarray) -> np.ndarray:
+    """values with a column of zeros appended (index K stands for "absent")."""
+    return np.concatenate([values, np.zeros((values.shape[0], 1))], axis=1)
+
+
 def _r_pair(b1: MassBatch, b2: MassBatch, model: Model, r_mode: str, empty_mode: str) -> MassBatch:
     if b2.model != model:
         b2 = b2.under(model)
@@ -717,26 +726,55 @@ def _r_pair(b1: MassBatch, b2: MassBatch, model: Model, r_mode: str, empty_mode:
     _require_nonempty(plan, "r_rule")
     rp = _r_plan(plan, empty_mode)
     n, (v1, v2) = _values([b1, b2])
-    product = plan.products([v1, v2])                                     # (N, T)
-    r = inconsistency(_gather(v1, rp.aligned[0]), _gather(v2, rp.aligned[1]), rp.union_focal, model, r_mode)
-    k = _sum_by(product, rp.pair_of_tuple, rp.n_pairs)                    # (N, C)  W (11)
-    m0 = _sum_by(product, rp.m0_of_tuple, rp.n_m0)                        # (N, P)  unnormalised m0
-    weights = _gather(m0, rp.m0_index.reshape(-1)).reshape(n, rp.n_pairs, 3)
-    total = weights.sum(axis=2)
-    fallback = ~(total > 0)
-    if fallback.any():
+    elements = sorted(set(rp.consensus_scatter.elements) | set(rp.pair_scatter.elements), key=lambda e: e.sort_key)
+    index = {e: i for i, e in enumerate(elements)}
+    consensus_columns = [index[e] for e in rp.consensus_scatter.elements]
+    pair_columns = [index[e] for e in rp.pair_scatter.elements]
+    out = np.zeros((n, len(elements)))
+    for rows in row_chunks(n, plan.count + 4 * len(rp.pair_starts)):
+        consensus, redistributed = _r_pair_rows(rp, v1[rows], v2[rows], model, r_mode)
+        out[rows, consensus_columns] = consensus
+        if redistributed is not None:
+            out[rows, pair_columns] += redistributed
+    return _prune(MassBatch._trusted(model, tuple(elements), out))
+
+
+def _r_pair_rows(rp: _RPlan, v1: np.ndarray, v2: np.ndarray, model: Model, r_mode: str):
+    """The consensus part and the redistributed local conflicts of some rows."""
+    n = v1.shape[0]
+    p1, p2 = _padded(v1), _padded(v2)
+    r = inconsistency(np.take(p1, rp.aligned[0], axis=1), np.take(p2, rp.aligned[1], axis=1),
+                      rp.union_focal, model, r_mode)                                     # W (10)
+    consensus = rp.consensus_scatter.apply(gather_product([v1, v2], rp.consensus))
+    n_pairs = len(rp.pair_starts)
+    if not n_pairs:
+        return consensus, None
+    k = np.add.reduceat(gather_product([v1, v2], rp.conflict), rp.pair_starts, axis=1)   # W (11)
+    if len(rp.projection_starts):
+        m0 = _padded(np.add.reduceat(gather_product([v1, v2], rp.projection), rp.projection_starts, axis=1))
+    else:
+        m0 = np.zeros((n, 1))
+    weights = [np.take(m0, rp.m0_index[:, slot], axis=1) for slot in range(3)]
+    total = weights[0] + weights[1] + weights[2]
+    missing = ~(total > 0)
+    if missing.any():
         # SPEC A.4: weight by the sources' own support of A, B and A ∪ B; failing that, all to A ∪ B.
-        support = (_gather(v1, rp.support[0].reshape(-1)) + _gather(v2, rp.support[1].reshape(-1))).reshape(
-            n, rp.n_pairs, 3)
-        weights = np.where(fallback[:, :, None], support, weights)
-        total = weights.sum(axis=2)
-        still = ~(total > 0)
-        if still.any():
-            weights = np.where(still[:, :, None], np.array([0.0, 0.0, 1.0]), weights)
-            total = weights.sum(axis=2)
-    shares = (1.0 - r)[:, None, None] * k[:, :, None] * weights / total[:, :, None]   # W (12), (12′), (13)
-    kept = r[:, None] * k                                                              # W (14)
-    pair_entries = np.concatenate([kept[:, :, None], shares], axis=2).reshape(n, 4 * rp.n_pairs)
-    contributions = np.concatenate([product[:, rp.consensus], pair_entries], axis=1)
-    out = rp.scatter.apply(contributions[:, rp.scatter.order])
-    return MassBatch._trusted(model, rp.scatter.elements, out)
+        cols = np.flatnonzero(missing.any(axis=0))
+        sub = missing[:, cols]
+        support = [np.take(p1, rp.support[0][cols, slot], axis=1) + np.take(p2, rp.support[1][cols, slot], axis=1)
+                   for slot in range(3)]
+        for slot in range(3):
+            weights[slot][:, cols] = np.where(sub, support[slot], weights[slot][:, cols])
+        sub_total = weights[0][:, cols] + weights[1][:, cols] + weights[2][:, cols]
+        none = ~(sub_total > 0)
+        if none.any():
+            weights[2][:, cols] = np.where(none, 1.0, weights[2][:, cols])
+            sub_total = np.where(none, 1.0, sub_total)
+        total[:, cols] = sub_total
+    share = k / total
+    share *= (1.0 - r)[:, None]
+    entries = np.empty((n, 4 * n_pairs))
+    entries[:, rp.pair_positions[0]] = r[:, None] * k                                    # W (14)
+    for slot in range(3):
+        entries[:, rp.pair_positions[slot + 1]] = share * weights[slot]                  # W (12), (12′), (13)
+    return consensus, rp.pair_scatter.apply(entries)
