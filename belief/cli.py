@@ -1,6 +1,6 @@
 """The ``belief`` command line.
 
-Subcommands: ``lattice``, ``measures``, ``transform`` and ``demo``.  Plugins add their own
+Subcommands: ``lattice``, ``measures``, ``transform``, ``combine``, ``rules`` and ``demo``.  Plugins add their own
 through the entry-point group ``belief.commands``: each entry point is a callable
 ``register(subparsers)`` that adds parsers to the sub-parser collection, and sets a
 ``func(args) -> int`` default on each.  The core never imports a plugin by name.
@@ -179,6 +179,46 @@ def _cmd_transform(args: argparse.Namespace) -> int:
     return 0
 
 
+# -- combine and rules ------------------------------------------------------------------------
+def _cmd_combine(args: argparse.Namespace) -> int:
+    from belief.rules import combine, get_rule
+
+    info = get_rule(args.rule)
+    if len(args.bba) < 2:
+        raise CommandError("belief combine: error: give at least two BBA files")
+    sources = [_read_bba(path) for path in args.bba]
+    model = None
+    if args.model:
+        model = Model.from_dict(sources[0].frame, _read_json(args.model, "model file"))
+    options = {}
+    if args.r_mode is not None:
+        options["r_mode"] = args.r_mode
+    if args.empty_mode is not None:
+        options["empty_mode"] = args.empty_mode
+    for k, source in enumerate(sources[1:], start=2):
+        if source.model != sources[0].model:
+            raise FormatError(f"{args.bba[k - 1]} was elicited under another frame or model than {args.bba[0]}")
+    result = combine(*sources, rule=info, model=model, **options)
+    if args.json:
+        _print_json(result.to_dict())
+    else:
+        print(_table(["proposition", "mass"], [(str(e), v) for e, v in result.items()]))
+    return 0
+
+
+def _cmd_rules(args: argparse.Namespace) -> int:
+    from belief.rules import RULES
+
+    rows = []
+    for info in RULES.values():
+        names = info.name + (f" ({', '.join(info.aliases)})" if info.aliases else "")
+        rows.append((names, info.summary))
+    width = max(len(r[0]) for r in rows)
+    for names, summary in rows:
+        print(f"{names.ljust(width)}  {summary}")
+    return 0
+
+
 # -- demo ----------------------------------------------------------------------------------------------
 def _cmd_demo(args: argparse.Namespace) -> int:
     from belief.demo import run_demo
@@ -224,6 +264,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--query", nargs="+", metavar="PROP", help="extra propositions for --pignistic/--dsmp")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_transform)
+
+    p = sub.add_parser("combine", help="combine BBA files with a rule",
+                       description="Combine two or more mass functions with a combination rule.")
+    p.add_argument("bba", nargs="+", metavar="BBA.json", help="the sources (at least two), all under one model")
+    p.add_argument("--rule", required=True, metavar="RULE", help="a rule name (see 'belief rules')")
+    p.add_argument("--model", metavar="MODEL.json", help="fusion model (default: the sources' model)")
+    p.add_argument("--r-mode", choices=["paper", "euclid", "jousselme"], help="r_rule: how R is measured")
+    p.add_argument("--empty-mode", choices=["union", "empty"], help="r_rule: where R·k goes when A∩B is empty")
+    p.add_argument("--json", action="store_true", help="print the result as a BBA file")
+    p.set_defaults(func=_cmd_combine)
+
+    p = sub.add_parser("rules", help="list the combination rules", description="List the combination rules.")
+    p.set_defaults(func=_cmd_rules)
 
     p = sub.add_parser("demo", help="a short demonstration on embedded data",
                        description="Fuse the evidence of an embedded example and print the results.")

@@ -215,3 +215,84 @@ def test_plugin_entry_points_are_registered(monkeypatch, capsys):
     code, out, err = run(capsys, "hello")
     assert code == 0 and out.strip() == "hello from a plugin"
     assert "plugin 'broken' could not be loaded" in err
+
+
+# -- combine and rules ------------------------------------------------------------------------------
+ZADEH_1 = {"frame": ["A", "B", "C"], "model": {"type": "shafer"}, "mass": {"A": 0.9, "C": 0.1}}
+ZADEH_2 = {"frame": ["A", "B", "C"], "model": {"type": "shafer"}, "mass": {"B": 0.9, "C": 0.1}}
+
+
+def test_rules_lists_every_registered_rule(capsys):
+    from belief.rules import RULES
+
+    code, out, _ = run(capsys, "rules")
+    listed = [line.split()[0] for line in out.splitlines()]
+    assert code == 0 and listed == list(RULES)
+
+
+def test_combine_zadeh_dempster_table(capsys, bba):
+    # Zadeh's example: Dempster's rule puts all the mass on C.
+    code, out, _ = run(capsys, "combine", "--rule", "dempster", bba(ZADEH_1, "1.json"), bba(ZADEH_2, "2.json"))
+    lines = out.splitlines()
+    assert code == 0 and lines[2].split() == ["C", "1.000000"] and len(lines) == 3
+
+
+def test_combine_json_keeps_conflict_and_can_be_combined_again(capsys, bba):
+    one, two = bba(ZADEH_1, "1.json"), bba(ZADEH_2, "2.json")
+    code, out, _ = run(capsys, "combine", "--rule", "conjunctive", one, two, "--json")
+    data = json.loads(out)
+    assert code == 0 and data["subnormal"] is True
+    assert data["mass"]["empty"] == pytest.approx(0.99) and data["mass"]["C"] == pytest.approx(0.01)
+    again = bba(data, "again.json")
+    code, out, _ = run(capsys, "combine", "--rule", "conjunctive", again, one, "--json")
+    assert code == 0 and json.loads(out)["mass"]["empty"] == pytest.approx(1 - 0.001)
+
+
+def test_combine_dynamic_fusion_with_model_file(capsys, bba, tmp_path):
+    free1 = dict(ZADEH_1, model={"type": "free"})
+    free2 = dict(ZADEH_2, model={"type": "free"})
+    model = tmp_path / "shafer.json"
+    model.write_text(json.dumps({"type": "shafer"}))
+    code, out, _ = run(capsys, "combine", "--rule", "dsmh", "--model", str(model),
+                       bba(free1, "1.json"), bba(free2, "2.json"), "--json")
+    data = json.loads(out)
+    # DSmH on Zadeh's example (DSmT book vol. 1, ch. 5): A∪B .81, A∪C .09, B∪C .09, C .01.
+    frame = Frame(["A", "B", "C"])
+    got = {frame.element(k): v for k, v in data["mass"].items()}
+    expected = {"A|B": 0.81, "A|C": 0.09, "B|C": 0.09, "C": 0.01}
+    assert code == 0 and data["model"] == {"type": "shafer"}
+    assert got.keys() == {frame.element(k) for k in expected}
+    for key, value in expected.items():
+        assert got[frame.element(key)] == pytest.approx(value)
+
+
+def test_combine_r_rule_options(capsys, bba):
+    one, two = bba(ZADEH_1, "1.json"), bba(ZADEH_2, "2.json")
+    _, paper, _ = run(capsys, "combine", "--rule", "r_rule", one, two, "--json")
+    _, euclid, _ = run(capsys, "combine", "--rule", "r_rule", "--r-mode", "euclid", one, two, "--json")
+    assert json.loads(paper)["mass"] != json.loads(euclid)["mass"]
+    code, _, err = run(capsys, "combine", "--rule", "dempster", "--r-mode", "euclid", one, two)
+    assert code == 1 and "r_mode" in err
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--rule", "nosuchrule"], "known rules: conjunctive"),
+])
+def test_combine_unknown_rule_lists_known(capsys, bba, argv, message):
+    code, _, err = run(capsys, "combine", *argv, bba(ZADEH_1, "1.json"), bba(ZADEH_2, "2.json"))
+    assert code == 1 and message in err and len(err.strip().splitlines()) == 1
+
+
+def test_combine_total_conflict_message(capsys, bba):
+    a = {"frame": ["A", "B"], "model": {"type": "shafer"}, "mass": {"A": 1.0}}
+    b = {"frame": ["A", "B"], "model": {"type": "shafer"}, "mass": {"B": 1.0}}
+    code, out, err = run(capsys, "combine", "--rule", "dempster", bba(a, "a.json"), bba(b, "b.json"))
+    assert code == 1 and out == "" and "total conflict" in err and len(err.strip().splitlines()) == 1
+
+
+def test_combine_needs_two_sources_of_one_model(capsys, bba):
+    code, _, err = run(capsys, "combine", "--rule", "pcr6", bba(ZADEH_1, "1.json"))
+    assert code == 2 and "at least two" in err
+    other = dict(ZADEH_2, model={"type": "free"})
+    code, _, err = run(capsys, "combine", "--rule", "pcr6", bba(ZADEH_1, "1.json"), bba(other, "2.json"))
+    assert code == 1 and "model" in err
