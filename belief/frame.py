@@ -285,7 +285,7 @@ class Element:
     a∩c ∪ b∩c
     """
 
-    __slots__ = ("frame", "terms", "_hash")
+    __slots__ = ("frame", "terms", "_hash", "_key")
 
     frame: Frame
     terms: tuple[int, ...]
@@ -302,6 +302,7 @@ class Element:
         object.__setattr__(self, "frame", frame)
         object.__setattr__(self, "terms", reduce_terms(checked))
         object.__setattr__(self, "_hash", hash((frame, self.terms)))
+        object.__setattr__(self, "_key", None)
 
     @classmethod
     def _make(cls, frame: Frame, terms: tuple[int, ...]) -> "Element":
@@ -310,6 +311,7 @@ class Element:
         object.__setattr__(obj, "frame", frame)
         object.__setattr__(obj, "terms", terms)
         object.__setattr__(obj, "_hash", hash((frame, terms)))
+        object.__setattr__(obj, "_key", None)
         return obj
 
     def __setattr__(self, name: str, value: object) -> None:
@@ -384,7 +386,11 @@ class Element:
         Fewer conjunctions first; then, term by term, smaller conjunctions first and
         frame order among equals: ∅, a, b, a&b, a|b, a|b&c, …
         """
-        return (len(self.terms), tuple((t.bit_count(), term_key(t)) for t in self.terms))
+        key = self._key
+        if key is None:
+            key = (len(self.terms), tuple((t.bit_count(), term_key(t)) for t in self.terms))
+            object.__setattr__(self, "_key", key)
+        return key
 
     # -- printing ------------------------------------------------------------------------
     def format(self, style: str = "ascii") -> str:

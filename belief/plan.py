@@ -49,14 +49,29 @@ class Scatter:
     """
 
     def __init__(self, targets: Sequence[Element]) -> None:
-        elements = sorted(set(targets), key=lambda e: e.sort_key)
-        index = {e: i for i, e in enumerate(elements)}
-        codes = np.fromiter((index[t] for t in targets), dtype=np.int64, count=len(targets))
-        order = np.argsort(codes, kind="stable")
-        sorted_codes = codes[order]
-        self.elements = tuple(elements)
+        unique: dict[Element, int] = {}
+        codes = np.fromiter((unique.setdefault(t, len(unique)) for t in targets), dtype=np.int64, count=len(targets))
+        self._build(list(unique), codes)
+
+    @classmethod
+    def from_codes(cls, unique: Sequence[Element], codes: np.ndarray) -> "Scatter":
+        """Build from distinct elements and, per contribution, the index of its target in ``unique``."""
+        scatter = object.__new__(cls)
+        scatter._build(list(unique), np.asarray(codes, dtype=np.int64))
+        return scatter
+
+    def _build(self, unique: list[Element], codes: np.ndarray) -> None:
+        rank_of = sorted(range(len(unique)), key=lambda i: unique[i].sort_key)
+        rank = np.empty(len(unique), dtype=np.int64)
+        rank[rank_of] = np.arange(len(unique))
+        ranked = rank[codes] if len(codes) else codes
+        order = np.argsort(ranked, kind="stable")
+        sorted_codes = ranked[order]
+        present = np.unique(sorted_codes)
+        self.elements = tuple(unique[rank_of[r]] for r in present.tolist())
         self.order = order
-        self.starts = np.flatnonzero(np.r_[True, sorted_codes[1:] != sorted_codes[:-1]]) if len(targets) else np.zeros(0, np.int64)
+        self.starts = (np.flatnonzero(np.r_[True, sorted_codes[1:] != sorted_codes[:-1]])
+                       if len(codes) else np.zeros(0, np.int64))
 
     def apply(self, sorted_contributions: np.ndarray) -> np.ndarray:
         """Sum contributions that are already in ``order``; (N, E) -> (N, R)."""
@@ -106,16 +121,31 @@ class TuplePlan:
         return list(zip(*(c.tolist() for c in self.columns)))
 
     @cached_property
+    def meet_table(self) -> tuple[list[Element], np.ndarray]:
+        """X_1 ∩ … ∩ X_s under the fusion model: the distinct results and, per tuple, an index into them."""
+        return self._fold(lambda a, b: a & b, np.bitwise_and)
+
+    @cached_property
+    def join_table(self) -> tuple[list[Element], np.ndarray]:
+        """X_1 ∪ … ∪ X_s under the fusion model, as :attr:`meet_table`."""
+        return self._fold(lambda a, b: a | b, np.bitwise_or)
+
+    @cached_property
     def meets(self) -> list[Element]:
         """X_1 ∩ … ∩ X_s under the fusion model, for every tuple."""
-        return self._fold(lambda a, b: a & b)
+        unique, codes = self.meet_table
+        return [unique[c] for c in codes.tolist()]
 
     @cached_property
     def joins(self) -> list[Element]:
         """X_1 ∪ … ∪ X_s under the fusion model, for every tuple."""
-        return self._fold(lambda a, b: a | b)
+        unique, codes = self.join_table
+        return [unique[c] for c in codes.tolist()]
 
-    def _fold(self, op) -> list[Element]:
+    def _fold(self, op, ufunc) -> tuple[list[Element], np.ndarray]:
+        fast = self._fold_exclusive(ufunc)
+        if fast is not None:
+            return fast
         # Fold source by source, caching partial results per prefix of the tuple.
         model = self.model
         partial: dict[tuple[int, ...], Element] = {(i,): x for i, x in enumerate(self.projected[0])}
@@ -125,12 +155,45 @@ class TuplePlan:
                 for i, x in enumerate(self.projected[source]):
                     nxt[prefix + (i,)] = model.reduce(op(value, x))
             partial = nxt
-        return [partial[t] for t in self.tuples]
+        unique: dict[Element, int] = {}
+        codes = np.fromiter((unique.setdefault(partial[t], len(unique)) for t in self.tuples),
+                            dtype=np.int64, count=self.count)
+        return list(unique), codes
+
+    def _fold_exclusive(self, ufunc) -> tuple[list[Element], np.ndarray] | None:
+        """Vectorised fold when every element is a union of hypotheses that exclude one another.
+
+        Under Shafer's model (or any model that forbids every pair of the hypotheses the
+        focal elements use) an element is just the set of its hypotheses, so ∩ and ∪ are
+        bitwise AND and OR of one 64-bit mask per element.
+        """
+        n = len(self.model.frame)
+        if n > 63 or self.count < 64:
+            return None
+        used = 0
+        for elements in self.projected:
+            for x in elements:
+                if any(t & (t - 1) for t in x.terms):
+                    return None
+                used |= x.hypotheses
+        bits = [i for i in range(n) if used >> i & 1]
+        if not all(self.model.is_forbidden((1 << i) | (1 << j)) for a, i in enumerate(bits) for j in bits[a + 1:]):
+            return None
+        masks = [np.array([x.hypotheses for x in elements], dtype=np.uint64) for elements in self.projected]
+        combined = masks[0][self.columns[0]]
+        for m, c in zip(masks[1:], self.columns[1:]):
+            combined = ufunc(combined, m[c])
+        unique, inverse = np.unique(combined, return_inverse=True)
+        frame = self.model.frame
+        elements = [Element._make(frame, tuple(1 << i for i in range(n) if int(u) >> i & 1)) for u in unique.tolist()]
+        return elements, inverse.reshape(-1).astype(np.int64)
 
     @cached_property
     def conflicting(self) -> np.ndarray:
         """True where the tuple's intersection is empty under the fusion model, shape (T,)."""
-        return np.fromiter((not m.terms for m in self.meets), dtype=bool, count=self.count)
+        unique, codes = self.meet_table
+        empty = np.array([not e.terms for e in unique], dtype=bool)
+        return empty[codes]
 
     # -- evaluation ---------------------------------------------------------------------------
     def products(self, values: Sequence[np.ndarray], order: np.ndarray | None = None) -> np.ndarray:

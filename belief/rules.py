@@ -261,7 +261,12 @@ def _require_nonempty(plan: TuplePlan, rule: str) -> None:
 @lru_cache(maxsize=512)
 def _kernel(plan: TuplePlan, key: str) -> tuple[Scatter, tuple[np.ndarray, ...]]:
     """The scatter of a one-target-per-tuple rule, and each source's columns in scatter order."""
-    scatter = Scatter(_TARGETS[key](plan))
+    if key == "meet":
+        scatter = Scatter.from_codes(*plan.meet_table)
+    elif key == "join":
+        scatter = Scatter.from_codes(*plan.join_table)
+    else:
+        scatter = Scatter(_TARGETS[key](plan))
     return scatter, tuple(c[scatter.order] for c in plan.columns)
 
 
