@@ -248,6 +248,16 @@ def _require_normal(batches: Sequence[MassBatch], rule: str) -> None:
             raise InvalidMassError(f"{rule} needs normal sources, but source {k} has mass on ∅; normalise it first")
 
 
+def _require_kept(batch: MassBatch, model: Model, rule: str, number: int) -> None:
+    """Refuse a focal element that vanishes under the fusion model: the rule has nowhere to send its mass."""
+    for x in batch.focal:
+        if x.terms and model.is_empty(x):
+            raise ModelError(
+                f"{rule} cannot give mass to {x} of source {number}, which is empty under the {model.kind} "
+                "fusion model; use dsmh for such dynamic fusion"
+            )
+
+
 def _require_nonempty(plan: TuplePlan, rule: str) -> None:
     for k, (orig, proj) in enumerate(zip(plan.focal, plan.projected), start=1):
         for x, y in zip(orig, proj):
@@ -575,12 +585,13 @@ def r_rule(sources: Sequence[MassBatch], model: Model, r_mode: str = "paper", em
         raise InvalidMassError(f"r_mode must be one of {', '.join(R_MODES)}, got {r_mode!r}")
     if empty_mode not in EMPTY_MODES:
         raise InvalidMassError(f"empty_mode must be one of {', '.join(EMPTY_MODES)}, got {empty_mode!r}")
-    if sources[0].empty_mass.any():
-        raise InvalidMassError("r_rule needs normal sources, but source 1 has mass on ∅; normalise it first")
-    result = sources[0]
-    for k, b in enumerate(sources[1:], start=2):
-        if b.empty_mass.any():
-            raise InvalidMassError(f"r_rule needs normal sources, but source {k} has mass on ∅; normalise it first")
+    _require_normal(sources, "r_rule")
+    for k, b in enumerate(sources, start=1):
+        _require_kept(b, model, "r_rule", k)
+    # Read every source under the fusion model first, so that elements it identifies are merged.
+    mapped = [b if b.model == model else b.under(model) for b in sources]
+    result = mapped[0]
+    for b in mapped[1:]:
         result = _r_pair(result, b, model, r_mode, empty_mode)
     return result
 
@@ -725,10 +736,7 @@ def _padded(values: np.ndarray) -> np.ndarray:
 
 
 def _r_pair(b1: MassBatch, b2: MassBatch, model: Model, r_mode: str, empty_mode: str) -> MassBatch:
-    if b2.model != model:
-        b2 = b2.under(model)
     plan = _plan([b1, b2], model)
-    _require_nonempty(plan, "r_rule")
     rp = _r_plan(plan, empty_mode)
     n, (v1, v2) = _values([b1, b2])
     elements = sorted(set(rp.consensus_scatter.elements) | set(rp.pair_scatter.elements), key=lambda e: e.sort_key)

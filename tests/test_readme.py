@@ -8,7 +8,7 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 
 
-@pytest.mark.parametrize("name", ["README.md", "docs/index.md", "docs/concepts.md"])
+@pytest.mark.parametrize("name", ["README.md", "docs/index.md", "docs/concepts.md", "docs/rules.md"])
 def test_markdown_examples(name):
     result = doctest.testfile(str(ROOT / name), module_relative=False, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0
