@@ -411,7 +411,7 @@ def dempster(sources: Sequence[MassBatch], model: Model) -> MassBatch:
 
 
 @register_rule("disjunctive", summary="disjunctive rule: products go to the union of the focal elements",
-               associative=True, aliases=("union",))
+               associative=True, keeps_conflict=True, aliases=("union",))
 def disjunctive(sources: Sequence[MassBatch], model: Model) -> MassBatch:
     """m(A) = Σ_{X_1∪…∪X_s=A} Π m_i(X_i) (Dubois & Prade 1986; Smets 1993)."""
     return _fold(sources, model, "join")
@@ -426,7 +426,7 @@ def yager(sources: Sequence[MassBatch], model: Model) -> MassBatch:
 
 
 @register_rule("dubois_prade", summary="Dubois–Prade: each conflicting product goes to the union of its elements",
-               associative=False, aliases=("dp", "duboisprade"))
+               associative=False, keeps_conflict=True, aliases=("dp", "duboisprade"))
 def dubois_prade(sources: Sequence[MassBatch], model: Model) -> MassBatch:
     """m(A) = Σ_{∩X_i=A} Π m_i(X_i) + Σ_{∩X_i=∅, ∪X_i=A} Π m_i(X_i), jointly over s sources.
 

@@ -10,6 +10,7 @@ reduction or cardinality code, so the tests can compare the library against it.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from fractions import Fraction
 
 from hypothesis import assume
 from hypothesis import strategies as st
@@ -247,6 +248,12 @@ def mass_cases(draw, min_n: int = 1, max_n: int = 4, kinds=("free", "shafer", "h
     return MassCase(case, draw(_entries(case, max_focal, sub)), sub)
 
 
+
+def mass_cases_under(case: ModelCase, subnormal=None, max_focal: int = 4):
+    """Random mass functions under the given model (``subnormal`` as for :func:`mass_cases`)."""
+    flags = st.booleans() if subnormal is None else st.just(subnormal)
+    return flags.flatmap(lambda sub: _entries(case, max_focal, sub).map(lambda entries: MassCase(case, entries, sub)))
+
 @st.composite
 def mass_case_lists(draw, min_n: int = 1, max_n: int = 4, size: int = 4,
                     kinds=("free", "shafer", "hybrid", "tracking"), max_focal: int = 4) -> list[MassCase]:
@@ -255,3 +262,92 @@ def mass_case_lists(draw, min_n: int = 1, max_n: int = 4, size: int = 4,
     assume(case.allowed)
     count = draw(st.integers(1, size))
     return [MassCase(case, draw(_entries(case, max_focal, False)), False) for _ in range(count)]
+
+
+# -- sources for the combination rules ------------------------------------------------------------------
+
+
+@st.composite
+def stricter_cases(draw, case: ModelCase) -> ModelCase:
+    """A model at least as strict as ``case`` (it forbids every region that ``case`` forbids).
+
+    Shafer's and the tracking models are offered when they are stricter; otherwise a hybrid
+    model that keeps the constraints of ``case`` and declares one or two more conjunctions empty.
+    """
+    frame, n = case.frame, case.n
+    options = ["hybrid"]
+    if shafer_allowed(n) <= case.allowed:
+        options.append("shafer")
+    fas = [i for i in range(n) if n >= 2 and tracking_allowed(n, i) <= case.allowed]
+    if fas:
+        options.append("tracking")
+    kind = draw(st.sampled_from(options))
+    if kind == "shafer":
+        return ModelCase(Model.shafer(frame), shafer_allowed(n), "shafer")
+    if kind == "tracking":
+        fa = draw(st.sampled_from(fas))
+        return ModelCase(Model.tracking(frame, frame.hypotheses[fa]), tracking_allowed(n, fa), f"tracking FA={fa}")
+    extra = draw(st.lists(conjunctions(n), min_size=1, max_size=2))
+    texts = [term_text(frame, t) for t in (*case.model.forbidden, *extra)]
+    return ModelCase(Model.hybrid(frame, texts), case.allowed & hybrid_allowed(n, extra),
+                     f"{case.label} then hybrid {texts}")
+
+
+@st.composite
+def focal_lists(draw, case: ModelCase, max_focal: int, prefer=frozenset()) -> list[Element]:
+    """Distinct elements that are not empty under ``case`` (conjunctions drawn partly from ``prefer``)."""
+    frame = case.frame
+    pools = [st.sampled_from(sorted(case.allowed)), conjunctions(case.n)]
+    if prefer:
+        pools.append(st.sampled_from(sorted(prefer)))
+    candidates = (st.lists(st.one_of(*pools), min_size=1, max_size=3)
+                  .map(lambda terms: Element(frame, terms))
+                  .filter(lambda e: bool(case.regions(e))))
+    return draw(st.lists(candidates, min_size=1, max_size=max_focal, unique=True))
+
+
+@dataclass(frozen=True)
+class FusionCase:
+    """s ≥ 2 sources elicited under one model, and the (possibly stricter) fusion model.
+
+    ``sources[k]`` lists (element as given, exact mass) pairs; masses are Fractions that sum
+    to one, handed to the library as floats.
+    """
+
+    source: ModelCase
+    fusion: ModelCase
+    sources: tuple[tuple[tuple[Element, Fraction], ...], ...]
+
+    @property
+    def dynamic(self) -> bool:
+        return self.fusion.allowed != self.source.allowed
+
+    def build(self) -> list[MassFunction]:
+        return [MassFunction({e: float(v) for e, v in s}, model=self.source.model) for s in self.sources]
+
+
+def exact_weights(weights: list[int]) -> list[Fraction]:
+    total = sum(weights)
+    return [Fraction(w, total) for w in weights]
+
+
+@st.composite
+def fusion_cases(draw, min_sources: int = 2, max_sources: int = 4, min_n: int = 1, max_n: int = 4,
+                 kinds=("free", "shafer", "hybrid", "tracking"), dynamic=False, max_focal: int = 3) -> FusionCase:
+    """Random sources under a random model; ``dynamic`` True (stricter fusion model), False or None."""
+    case = draw(any_model_cases(min_n, max_n, kinds))
+    assume(case.allowed)
+    fusion = case
+    if dynamic is None:
+        dynamic = draw(st.booleans())
+    if dynamic:
+        fusion = draw(stricter_cases(case))
+        assume(fusion.allowed)
+    count = draw(st.integers(min_sources, max_sources))
+    sources = []
+    for _ in range(count):
+        focal = draw(focal_lists(case, max_focal, prefer=fusion.allowed))
+        weights = draw(st.lists(st.integers(1, 12), min_size=len(focal), max_size=len(focal)))
+        sources.append(tuple(zip(focal, exact_weights(weights))))
+    return FusionCase(case, fusion, tuple(sources))
+
