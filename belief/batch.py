@@ -238,7 +238,7 @@ class MassBatch:
     array([1., 1.])
     """
 
-    __slots__ = ("model", "focal", "values", "__weakref__")
+    __slots__ = ("model", "focal", "values", "_canonical", "__weakref__")
 
     def __init__(self, focal: Iterable[Query], values, frame=None, model=None, *,
                  subnormal: bool = False, validate: bool = True) -> None:
@@ -266,13 +266,17 @@ class MassBatch:
         self.model = model
         self.focal = tuple(elements)
         self.values = array
+        keys = [e.sort_key for e in self.focal]
+        self._canonical = all(a < b for a, b in zip(keys, keys[1:]))
 
     @classmethod
-    def _trusted(cls, model: Model, focal: tuple[Element, ...], values: np.ndarray) -> "MassBatch":
+    def _trusted(cls, model: Model, focal: tuple[Element, ...], values: np.ndarray,
+                 canonical: bool = False) -> "MassBatch":
+        """Wrap arrays the library computed; ``canonical`` says the focal elements are in canonical order."""
         obj = object.__new__(cls)
         values = np.asarray(values, dtype=np.float64)
         values.flags.writeable = False
-        obj.model, obj.focal, obj.values = model, focal, values
+        obj.model, obj.focal, obj.values, obj._canonical = model, focal, values, canonical
         return obj
 
     @classmethod
@@ -299,7 +303,7 @@ class MassBatch:
         for row, m in enumerate(masses):
             for e, v in zip(m.focal, m.values.tolist()):
                 values[row, column[e]] = v
-        return cls._trusted(model, tuple(focal), values)
+        return cls._trusted(model, tuple(focal), values, canonical=True)
 
     # -- protocol ----------------------------------------------------------------------------
     @property
@@ -320,8 +324,11 @@ class MassBatch:
         if row.ndim != 1:
             raise TypeError("index a batch with one integer; use .values for slices")
         # canonical order of focal elements, as MassFunction equality and hashing expect
-        kept = sorted((i for i, k in enumerate((row > 0).tolist()) if k), key=lambda i: self.focal[i].sort_key)
-        return MassFunction._trusted(self.model, tuple(self.focal[i] for i in kept), row[kept])
+        kept = np.flatnonzero(row > 0).tolist()
+        if not self._canonical:
+            kept.sort(key=lambda i: self.focal[i].sort_key)
+        focal = self.focal
+        return MassFunction._trusted(self.model, tuple([focal[i] for i in kept]), row[kept])
 
     def __iter__(self):
         for i in range(len(self)):
@@ -427,7 +434,7 @@ class MassBatch:
         for i, t in enumerate(targets):
             mapping[i, column[t]] = 1.0
         values = self.values @ mapping
-        return MassBatch._trusted(self.model, tuple(order), values)
+        return MassBatch._trusted(self.model, tuple(order), values, canonical=True)
 
     def discount(self, alpha: float) -> "MassBatch":
         """Shafer discounting with reliability α: m_α(X) = α m(X), m_α(Θ) += 1 - α.
@@ -445,7 +452,7 @@ class MassBatch:
             focal.append(total)
             values = np.hstack([values, np.full((len(self), 1), 1.0 - alpha)])
         order = sorted(range(len(focal)), key=lambda i: focal[i].sort_key)
-        return MassBatch._trusted(self.model, tuple(focal[i] for i in order), values[:, order])
+        return MassBatch._trusted(self.model, tuple(focal[i] for i in order), values[:, order], canonical=True)
 
     def condition(self, given: Query, normalized: bool = True) -> "MassBatch":
         """Dempster conditioning on ``given``: m(C | B) = Σ_{X∩B=C} m(X).
@@ -459,15 +466,18 @@ class MassBatch:
         result = self._regroup(targets)
         if not normalized:
             return result
-        return MassBatch._trusted(result.model, result.focal, result._normal_values(f"conditioning on {named}"))._drop_empty()
+        return MassBatch._trusted(result.model, result.focal, result._normal_values(f"conditioning on {named}"),
+                                  canonical=result._canonical)._drop_empty()
 
     def _drop_empty(self) -> "MassBatch":
         keep = [i for i, e in enumerate(self.focal) if e.terms]
-        return MassBatch._trusted(self.model, tuple(self.focal[i] for i in keep), self.values[:, keep])
+        return MassBatch._trusted(self.model, tuple(self.focal[i] for i in keep), self.values[:, keep],
+                                  canonical=self._canonical)
 
     def normalized(self) -> "MassBatch":
         """Remove the mass of ∅ and rescale each row by 1 - m(∅)."""
-        return MassBatch._trusted(self.model, self.focal, self._normal_values("normalisation"))._drop_empty()
+        return MassBatch._trusted(self.model, self.focal, self._normal_values("normalisation"),
+                                  canonical=self._canonical)._drop_empty()
 
     def under(self, model: Model) -> "MassBatch":
         """The same evidence read under a stricter model (dynamic fusion).

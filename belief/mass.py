@@ -225,7 +225,8 @@ class MassFunction(Mapping):
     def batch(self) -> MassBatch:
         """This mass function as a one-row :class:`MassBatch`."""
         if self._batch is None:
-            object.__setattr__(self, "_batch", MassBatch._trusted(self.model, self.focal, self.values.reshape(1, -1)))
+            object.__setattr__(self, "_batch", MassBatch._trusted(self.model, self.focal, self.values.reshape(1, -1),
+                                                                   canonical=True))
         return self._batch  # type: ignore[return-value]
 
     def _one(self, method: str, query, **kwargs):

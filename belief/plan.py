@@ -65,13 +65,16 @@ class Scatter:
         rank = np.empty(len(unique), dtype=np.int64)
         rank[rank_of] = np.arange(len(unique))
         ranked = rank[codes] if len(codes) else codes
+        if len(unique) < 1 << 16:
+            # Small integer keys sort by radix in linear time.
+            ranked = ranked.astype(np.uint16 if len(unique) >= 1 << 8 else np.uint8)
         order = np.argsort(ranked, kind="stable")
         sorted_codes = ranked[order]
-        present = np.unique(sorted_codes)
-        self.elements = tuple(unique[rank_of[r]] for r in present.tolist())
+        starts = (np.flatnonzero(np.r_[True, sorted_codes[1:] != sorted_codes[:-1]])
+                  if len(codes) else np.zeros(0, np.int64))
+        self.elements = tuple(unique[rank_of[r]] for r in sorted_codes[starts].tolist())
         self.order = order
-        self.starts = (np.flatnonzero(np.r_[True, sorted_codes[1:] != sorted_codes[:-1]])
-                       if len(codes) else np.zeros(0, np.int64))
+        self.starts = starts
 
     def apply(self, sorted_contributions: np.ndarray) -> np.ndarray:
         """Sum contributions that are already in ``order``; (N, E) -> (N, R)."""
@@ -107,8 +110,13 @@ class TuplePlan:
     @cached_property
     def columns(self) -> tuple[np.ndarray, ...]:
         """For each source, its focal-element column in every tuple (row-major order), shape (T,)."""
-        grids = np.indices(self.sizes, dtype=np.int64).reshape(len(self.sizes), -1)
-        return tuple(grids)
+        sizes = self.sizes
+        columns = []
+        for i, size in enumerate(sizes):
+            inner = int(np.prod(sizes[i + 1:], dtype=np.int64))
+            outer = int(np.prod(sizes[:i], dtype=np.int64))
+            columns.append(np.tile(np.repeat(np.arange(size, dtype=np.int64), inner), outer))
+        return tuple(columns)
 
     @cached_property
     def projected(self) -> tuple[tuple[Element, ...], ...]:

@@ -288,7 +288,7 @@ def _tuple_targets_rule(batches: Sequence[MassBatch], model: Model, key: str) ->
     out = np.empty((n, len(scatter.elements)))
     for rows in row_chunks(n, plan.count):
         out[rows] = scatter.apply(gather_product([v[rows] for v in values], columns))
-    return MassBatch._trusted(model, scatter.elements, out)
+    return MassBatch._trusted(model, scatter.elements, out, canonical=True)
 
 
 def _prune(batch: MassBatch) -> MassBatch:
@@ -296,7 +296,8 @@ def _prune(batch: MassBatch) -> MassBatch:
     live = np.flatnonzero((batch.values != 0).any(axis=0))
     if live.size == len(batch.focal):
         return batch
-    return MassBatch._trusted(batch.model, tuple(batch.focal[i] for i in live.tolist()), batch.values[:, live])
+    return MassBatch._trusted(batch.model, tuple(batch.focal[i] for i in live.tolist()), batch.values[:, live],
+                              canonical=batch._canonical)
 
 
 def _fold(batches: Sequence[MassBatch], model: Model, key: str) -> MassBatch:
@@ -352,14 +353,18 @@ _TARGETS: dict[str, Callable[[TuplePlan], list[Element]]] = {
 
 def _move_empty(result: MassBatch, to: Element | None, model: Model, rule: str) -> MassBatch:
     """Remove the ∅ column: renormalise (``to=None``, Dempster) or add it to ``to`` (Yager)."""
-    focal = list(result.focal)
-    if not any(not e.terms for e in focal):
-        return result
-    k = next(i for i, e in enumerate(focal) if not e.terms)
+    focal = result.focal
+    if result._canonical:                      # ∅ sorts first
+        if not focal or focal[0].terms:
+            return result
+        k = 0
+    else:
+        if all(e.terms for e in focal):
+            return result
+        k = next(i for i, e in enumerate(focal) if not e.terms)
     values = result.values
-    keep = [i for i in range(len(focal)) if i != k]
     if to is None:
-        kept = values[:, keep]
+        kept = np.delete(values, k, axis=1)
         scale = kept.sum(axis=1)
         dead = ~(scale > 0)
         if dead.any():
@@ -367,16 +372,16 @@ def _move_empty(result: MassBatch, to: Element | None, model: Model, rule: str) 
             where = f" (row {row})" if len(values) > 1 else ""
             raise TotalConflictError(f"{rule}: total conflict between the sources{where}, m(∅) = 1; "
                                      "Dempster's rule is undefined (try yager, dubois_prade, dsmh or pcr6)")
-        return MassBatch._trusted(model, tuple(focal[i] for i in keep), kept / scale[:, None])
-    new_focal = [focal[i] for i in keep]
-    new_values = values[:, keep].copy()
+        return MassBatch._trusted(model, focal[:k] + focal[k + 1:], kept / scale[:, None], canonical=result._canonical)
+    new_focal = list(focal[:k] + focal[k + 1:])
+    new_values = np.delete(values, k, axis=1)
     if to in new_focal:
         new_values[:, new_focal.index(to)] += values[:, k]
     else:
         new_focal.append(to)
         new_values = np.hstack([new_values, values[:, k:k + 1]])
     order = sorted(range(len(new_focal)), key=lambda i: new_focal[i].sort_key)
-    return MassBatch._trusted(model, tuple(new_focal[i] for i in order), new_values[:, order])
+    return MassBatch._trusted(model, tuple(new_focal[i] for i in order), new_values[:, order], canonical=True)
 
 
 # -- the rules ----------------------------------------------------------------------------------------
@@ -498,7 +503,7 @@ def _add(model: Model, base: MassBatch, elements: Sequence[Element], values: np.
     out = np.zeros((max(len(base), len(values)), len(focal)))
     out[:, [index[base.focal[i]] for i in keep]] += base.values[:, keep]
     out[:, [index[e] for e in elements]] += values
-    return MassBatch._trusted(model, tuple(focal), out)
+    return MassBatch._trusted(model, tuple(focal), out, canonical=True)
 
 
 @lru_cache(maxsize=512)
@@ -512,27 +517,32 @@ def _pcr_kernel(plan: TuplePlan, rule: str):
     s = len(plan.focal)
     conflict = np.flatnonzero(plan.conflicting)
     columns = tuple(c[conflict] for c in plan.columns)
-    targets = [plan.projected[i][int(columns[i][t])] for i in range(s) for t in range(conflict.size)]
-    scatter = Scatter(targets)
-    rank = np.empty(len(targets), dtype=np.int64)
-    rank[scatter.order] = np.arange(len(targets))
+    codes = _element_codes(plan)
+    unique = codes[0]
+    slot_codes = [codes[1][i][columns[i]] for i in range(s)]          # each (Tc,)
+    scatter = Scatter.from_codes(unique, np.concatenate(slot_codes) if s else np.zeros(0, np.int64))
+    total = conflict.size * s
+    rank = np.empty(total, dtype=np.int64)
+    rank[scatter.order] = np.arange(total)
     positions = tuple(rank[i * conflict.size:(i + 1) * conflict.size] for i in range(s))
-    representative = _representatives(plan)[conflict] if rule == "pcr5" else None
+    representative = None
+    if rule == "pcr5":
+        # rep[t, i]: the first slot of tuple t whose element equals slot i's element.
+        representative = np.empty((conflict.size, s), dtype=np.int64)
+        for i in range(s):
+            rep = np.full(conflict.size, i, dtype=np.int64)
+            for j in range(i - 1, -1, -1):
+                rep = np.where(slot_codes[j] == slot_codes[i], j, rep)
+            representative[:, i] = rep
     return scatter, columns, positions, representative
 
 
-@lru_cache(maxsize=512)
-def _representatives(plan: TuplePlan) -> np.ndarray:
-    """rep[t, i]: the first source of tuple t whose (projected) focal element equals source i's."""
-    s = len(plan.focal)
-    rep = np.empty((plan.count, s), dtype=np.int64)
-    for t, combo in enumerate(plan.tuples):
-        elements = [plan.projected[i][c] for i, c in enumerate(combo)]
-        for i, e in enumerate(elements):
-            rep[t, i] = elements.index(e)
-    return rep
-
-
+def _element_codes(plan: TuplePlan) -> tuple[list[Element], list[np.ndarray]]:
+    """The distinct projected focal elements of all sources, and per source the code of each column."""
+    index: dict[Element, int] = {}
+    per_source = [np.array([index.setdefault(x, len(index)) for x in elements], dtype=np.int64)
+                  for elements in plan.projected]
+    return list(index), per_source
 
 
 @register_rule("pcr5", summary="PCR5: conflicting products go back to the elements involved, by mass products",
@@ -749,7 +759,7 @@ def _r_pair(b1: MassBatch, b2: MassBatch, model: Model, r_mode: str, empty_mode:
         out[rows, consensus_columns] = consensus
         if redistributed is not None:
             out[rows, pair_columns] += redistributed
-    return _prune(MassBatch._trusted(model, tuple(elements), out))
+    return _prune(MassBatch._trusted(model, tuple(elements), out, canonical=True))
 
 
 def _r_pair_rows(rp: _RPlan, v1: np.ndarray, v2: np.ndarray, model: Model, r_mode: str):
