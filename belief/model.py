@@ -160,10 +160,14 @@ class Model:
 
     def reduce(self, element: Union[Element, str]) -> Element:
         """The canonical form of an element under this model (forbidden conjunctions dropped)."""
-        element = self.frame.element(element)
+        if not (isinstance(element, Element) and element.frame is self.frame):
+            element = self.frame.element(element)
         if not self.forbidden:
             return element
-        kept = tuple(t for t in element.terms if not self.is_forbidden(t))
+        if self.kind == "shafer":
+            kept = tuple(t for t in element.terms if not t & (t - 1))
+        else:
+            kept = tuple(t for t in element.terms if not self.is_forbidden(t))
         if len(kept) == len(element.terms):
             return element
         return Element._make(self.frame, kept)

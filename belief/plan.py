@@ -61,7 +61,8 @@ class Scatter:
         return scatter
 
     def _build(self, unique: list[Element], codes: np.ndarray) -> None:
-        rank_of = sorted(range(len(unique)), key=lambda i: unique[i].sort_key)
+        keys = [e.sort_key for e in unique]
+        rank_of = sorted(range(len(unique)), key=keys.__getitem__)
         rank = np.empty(len(unique), dtype=np.int64)
         rank[rank_of] = np.arange(len(unique))
         ranked = rank[codes] if len(codes) else codes
@@ -193,7 +194,7 @@ class TuplePlan:
             combined = ufunc(combined, m[c])
         unique, inverse = np.unique(combined, return_inverse=True)
         frame = self.model.frame
-        elements = [Element._make(frame, tuple(1 << i for i in range(n) if int(u) >> i & 1)) for u in unique.tolist()]
+        elements = [_union_of(frame, u) for u in unique.tolist()]
         return elements, inverse.reshape(-1).astype(np.int64)
 
     @cached_property
@@ -216,6 +217,12 @@ def gather_product(values: Sequence[np.ndarray], columns: Sequence[np.ndarray]) 
     for v, c in zip(values[1:], columns[1:]):
         result *= np.take(v, c, axis=1)
     return result
+
+
+@lru_cache(maxsize=1 << 16)
+def _union_of(frame, mask: int) -> Element:
+    """The union of the hypotheses in ``mask`` (cached: exclusive models reuse few elements)."""
+    return Element._make(frame, tuple(1 << i for i in range(mask.bit_length()) if mask >> i & 1))
 
 
 @lru_cache(maxsize=512)

@@ -619,15 +619,15 @@ def _shafer_projection(element: Element) -> int:
 class _RPlan:
     """Index tables of the R-weighted rule for one pair of focal-element lists."""
 
-    consensus: tuple[np.ndarray, np.ndarray]   # source columns of consensus tuples, sorted by target
-    consensus_scatter: Scatter
+    consensus: tuple[np.ndarray, np.ndarray]   # source columns of the consensus tuples
+    scatter: Scatter                           # targets of [consensus tuples | kept, A, B, A∪B of every pair]
+    consensus_positions: np.ndarray            # where the consensus entries sit in scatter order
     conflict: tuple[np.ndarray, np.ndarray]    # source columns of conflicting tuples, sorted by pair
     pair_starts: np.ndarray                    # where each pair's run starts, shape (C,)
     projection: tuple[np.ndarray, np.ndarray]  # tuples whose Shafer projections meet, sorted by that meet
     projection_starts: np.ndarray              # shape (P,)
     m0_index: np.ndarray                       # (C, 3): m0 column of π0(A), π0(B), π0(A∪B), or P if none
     support: tuple[np.ndarray, np.ndarray]     # (C, 3): columns of A, B, A∪B in each source, or K_i if absent
-    pair_scatter: Scatter                      # targets of the entries [kept, A, B, A∪B] of every pair
     pair_positions: tuple[np.ndarray, ...]     # four (C,) arrays: where each slot's entries sit in scatter order
     aligned: tuple[np.ndarray, np.ndarray]     # columns of the union of focal elements in each source, or K_i
     union_focal: tuple[Element, ...]
@@ -677,8 +677,7 @@ def _r_plan(plan: TuplePlan, empty_mode: str) -> _RPlan:
         else:
             consensus.append(t)
             consensus_targets.append(z)
-    consensus_scatter = Scatter(consensus_targets)
-    cons = np.array(consensus, dtype=np.int64)[consensus_scatter.order]
+    cons = np.array(consensus, dtype=np.int64)
     conflict_columns, pair_starts = _grouped(conflict_pair, (c1[conflict], c2[conflict]))
     projection_columns, projection_starts = _grouped(projected_key, (c1[projected], c2[projected]))
     n_pairs = len(pairs)
@@ -700,15 +699,18 @@ def _r_plan(plan: TuplePlan, empty_mode: str) -> _RPlan:
                 m0_index[c, slot] = keys[p]
             support1[c, slot] = columns1.get(e, len(first))
             support2[c, slot] = columns2.get(e, len(second))
-    pair_scatter = Scatter([e for slot in slot_targets for e in slot])
-    rank = np.empty(4 * n_pairs, dtype=np.int64)
-    rank[pair_scatter.order] = np.arange(4 * n_pairs)
-    positions = tuple(rank[slot * n_pairs:(slot + 1) * n_pairs] for slot in range(4))
+    n_cons = len(consensus)
+    scatter = Scatter(consensus_targets + [e for slot in slot_targets for e in slot])
+    rank = np.empty(n_cons + 4 * n_pairs, dtype=np.int64)
+    rank[scatter.order] = np.arange(rank.size)
+    consensus_positions = rank[:n_cons]
+    positions = tuple(rank[n_cons + slot * n_pairs:n_cons + (slot + 1) * n_pairs] for slot in range(4))
     union_focal = tuple(sorted(set(first) | set(second), key=lambda e: e.sort_key))
     aligned = (np.array([columns1.get(e, len(first)) for e in union_focal], dtype=np.int64),
                np.array([columns2.get(e, len(second)) for e in union_focal], dtype=np.int64))
-    return _RPlan((c1[cons], c2[cons]), consensus_scatter, conflict_columns, pair_starts, projection_columns,
-                  projection_starts, m0_index, (support1, support2), pair_scatter, positions, aligned, union_focal)
+    return _RPlan((c1[cons], c2[cons]), scatter, consensus_positions, conflict_columns, pair_starts,
+                  projection_columns, projection_starts, m0_index, (support1, support2), positions, aligned,
+                  union_focal)
 
 
 def inconsistency(m1: np.ndarray, m2: np.ndarray, focal: Sequence[Element], model: Model,
@@ -749,29 +751,25 @@ def _r_pair(b1: MassBatch, b2: MassBatch, model: Model, r_mode: str, empty_mode:
     plan = _plan([b1, b2], model)
     rp = _r_plan(plan, empty_mode)
     n, (v1, v2) = _values([b1, b2])
-    elements = sorted(set(rp.consensus_scatter.elements) | set(rp.pair_scatter.elements), key=lambda e: e.sort_key)
-    index = {e: i for i, e in enumerate(elements)}
-    consensus_columns = [index[e] for e in rp.consensus_scatter.elements]
-    pair_columns = [index[e] for e in rp.pair_scatter.elements]
-    out = np.zeros((n, len(elements)))
-    for rows in row_chunks(n, plan.count + 4 * len(rp.pair_starts)):
-        consensus, redistributed = _r_pair_rows(rp, v1[rows], v2[rows], model, r_mode)
-        out[rows, consensus_columns] = consensus
-        if redistributed is not None:
-            out[rows, pair_columns] += redistributed
-    return _prune(MassBatch._trusted(model, tuple(elements), out, canonical=True))
+    out = np.empty((n, len(rp.scatter.elements)))
+    width = len(rp.consensus_positions) + 4 * len(rp.pair_starts)
+    for rows in row_chunks(n, plan.count + width):
+        out[rows] = rp.scatter.apply(_r_pair_entries(rp, v1[rows], v2[rows], model, r_mode, width))
+    return _prune(MassBatch._trusted(model, rp.scatter.elements, out, canonical=True))
 
 
-def _r_pair_rows(rp: _RPlan, v1: np.ndarray, v2: np.ndarray, model: Model, r_mode: str):
-    """The consensus part and the redistributed local conflicts of some rows."""
+def _r_pair_entries(rp: _RPlan, v1: np.ndarray, v2: np.ndarray, model: Model, r_mode: str,
+                    width: int) -> np.ndarray:
+    """Every contribution of some rows, in scatter order: consensus products and shared local conflicts."""
     n = v1.shape[0]
+    entries = np.empty((n, width))
+    entries[:, rp.consensus_positions] = gather_product([v1, v2], rp.consensus)
+    n_pairs = len(rp.pair_starts)
+    if not n_pairs:
+        return entries
     p1, p2 = _padded(v1), _padded(v2)
     r = inconsistency(np.take(p1, rp.aligned[0], axis=1), np.take(p2, rp.aligned[1], axis=1),
                       rp.union_focal, model, r_mode)                                     # W (10)
-    consensus = rp.consensus_scatter.apply(gather_product([v1, v2], rp.consensus))
-    n_pairs = len(rp.pair_starts)
-    if not n_pairs:
-        return consensus, None
     k = np.add.reduceat(gather_product([v1, v2], rp.conflict), rp.pair_starts, axis=1)   # W (11)
     if len(rp.projection_starts):
         m0 = _padded(np.add.reduceat(gather_product([v1, v2], rp.projection), rp.projection_starts, axis=1))
@@ -796,8 +794,7 @@ def _r_pair_rows(rp: _RPlan, v1: np.ndarray, v2: np.ndarray, model: Model, r_mod
         total[:, cols] = sub_total
     share = k / total
     share *= (1.0 - r)[:, None]
-    entries = np.empty((n, 4 * n_pairs))
     entries[:, rp.pair_positions[0]] = r[:, None] * k                                    # W (14)
     for slot in range(3):
         entries[:, rp.pair_positions[slot + 1]] = share * weights[slot]                  # W (12), (12′), (13)
-    return consensus, rp.pair_scatter.apply(entries)
+    return entries
