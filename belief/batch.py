@@ -238,7 +238,7 @@ class MassBatch:
     array([1., 1.])
     """
 
-    __slots__ = ("model", "focal", "values", "_canonical", "__weakref__")
+    __slots__ = ("model", "focal", "values", "_canonical", "_key", "__weakref__")
 
     def __init__(self, focal: Iterable[Query], values, frame=None, model=None, *,
                  subnormal: bool = False, validate: bool = True) -> None:
@@ -268,6 +268,7 @@ class MassBatch:
         self.values = array
         keys = [e.sort_key for e in self.focal]
         self._canonical = all(a < b for a, b in zip(keys, keys[1:]))
+        self._key = None
 
     @classmethod
     def _trusted(cls, model: Model, focal: tuple[Element, ...], values: np.ndarray,
@@ -276,8 +277,17 @@ class MassBatch:
         obj = object.__new__(cls)
         values = np.asarray(values, dtype=np.float64)
         values.flags.writeable = False
-        obj.model, obj.focal, obj.values, obj._canonical = model, focal, values, canonical
+        obj.model, obj.focal, obj.values, obj._canonical, obj._key = model, focal, values, canonical, None
         return obj
+
+    @property
+    def focal_key(self):
+        """The focal elements as a hashable key hashed once (combination plans are cached by it)."""
+        if self._key is None:
+            from belief.plan import FocalKey
+
+            self._key = FocalKey(self.focal)
+        return self._key
 
     @classmethod
     def from_mass_functions(cls, masses: Sequence["MassFunction"]) -> "MassBatch":
@@ -324,7 +334,10 @@ class MassBatch:
         if row.ndim != 1:
             raise TypeError("index a batch with one integer; use .values for slices")
         # canonical order of focal elements, as MassFunction equality and hashing expect
-        kept = np.flatnonzero(row > 0).tolist()
+        positive = row > 0
+        if self._canonical and positive.all():
+            return MassFunction._trusted(self.model, self.focal, row)
+        kept = np.flatnonzero(positive).tolist()
         if not self._canonical:
             kept.sort(key=lambda i: self.focal[i].sort_key)
         focal = self.focal

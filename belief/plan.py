@@ -22,7 +22,7 @@ import numpy as np
 from belief.frame import Element
 from belief.model import Model
 
-__all__ = ["TuplePlan", "Scatter", "tuple_plan", "MAX_TUPLES"]
+__all__ = ["TuplePlan", "Scatter", "FocalKey", "tuple_plan", "MAX_TUPLES"]
 
 #: Refuse joint combinations with more focal-element tuples than this.
 MAX_TUPLES = 20_000_000
@@ -225,10 +225,33 @@ def _union_of(frame, mask: int) -> Element:
     return Element._make(frame, tuple(1 << i for i in range(mask.bit_length()) if mask >> i & 1))
 
 
+class FocalKey:
+    """A hashable stand-in for a tuple of focal elements, hashed once (plans are looked up by it)."""
+
+    __slots__ = ("focal", "_hash")
+
+    def __init__(self, focal: tuple[Element, ...]) -> None:
+        self.focal = focal
+        self._hash = hash(focal)
+
+    def __hash__(self) -> int:
+        return self._hash
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, FocalKey):
+            return NotImplemented
+        return self.focal is other.focal or (self._hash == other._hash and self.focal == other.focal)
+
+
+def tuple_plan(source_model: Model, model: Model, focal) -> TuplePlan:
+    """The cached :class:`TuplePlan` of these focal-element lists (tuples of elements or :class:`FocalKey`)."""
+    keys = tuple(f if isinstance(f, FocalKey) else FocalKey(tuple(f)) for f in focal)
+    return _cached_plan(source_model, model, keys)
+
+
 @lru_cache(maxsize=512)
-def tuple_plan(source_model: Model, model: Model, focal: tuple[tuple[Element, ...], ...]) -> TuplePlan:
-    """The cached :class:`TuplePlan` of these focal-element lists."""
-    return TuplePlan(source_model, model, focal)
+def _cached_plan(source_model: Model, model: Model, keys: tuple[FocalKey, ...]) -> TuplePlan:
+    return TuplePlan(source_model, model, tuple(k.focal for k in keys))
 
 
 def row_chunks(n_rows: int, width: int):

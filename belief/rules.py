@@ -233,7 +233,7 @@ def _values(batches: Sequence[MassBatch]) -> tuple[int, list[np.ndarray]]:
 
 
 def _plan(batches: Sequence[MassBatch], model: Model) -> TuplePlan:
-    plan = tuple_plan(batches[0].model, model, tuple(b.focal for b in batches))
+    plan = tuple_plan(batches[0].model, model, tuple(b.focal_key for b in batches))
     if plan.count > MAX_TUPLES:
         raise InvalidMassError(
             f"joint combination of {len(batches)} sources visits {plan.count:,} tuples of focal elements, "

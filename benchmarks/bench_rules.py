@@ -1,0 +1,627 @@
+"""Benchmark: combination rules (Dempster, PCR5/PCR6, batches, tracking), against peer libraries.
+
+Run from the repository root::
+
+    python benchmarks/bench_rules.py                # tables and PASS/FAIL per target
+    python benchmarks/bench_rules.py --check        # exit 1 if a target fails
+    python benchmarks/bench_rules.py --json         # machine-readable output
+    python benchmarks/bench_rules.py --quick        # smaller sizes, a smoke run (targets skipped)
+    python benchmarks/bench_rules.py --cases a,c    # some of the cases only
+
+Cases:
+
+(a) Dempster's rule of two sources with k = 8, 32, 128 random focal elements each (random
+    non-empty subsets, random masses) on a frame of 10 hypotheses under Shafer's model.
+(b) Joint PCR5 and PCR6 of s = 2..10 near-Bayesian sources on 3 hypotheses, 3 focal
+    elements each (3^s tuples of focal elements).
+(c) Throughput of two-source Dempster on 3 hypotheses: two MassBatch of 10^5 rows over
+    the 7 non-empty subsets, combined in one call.
+(d) A tracking-shaped batch: 10 targets and a false alarm (Model.for_targets(10)), 3
+    Bayesian cues (Dirichlet masses over the 11 singletons), 10^4 rows, with the rules
+    dsmc, pcr6 and r_rule.
+
+Peers come from the ``bench`` extra (``pip install ".[bench]"``): evidencelib (DST and
+DSmT, pure Python), py-dempster-shafer (module ``pyds``) and pybelief (both DST only).
+Each is used only where it implements the case; a missing peer is reported and its
+columns are skipped.  Every library gets the same inputs (fixed seeds), and the results
+are compared with belief's: "agree" means every mass is within 1e-9.
+
+Every measurement runs in a fresh (spawned) process, which first makes one untimed call
+on other inputs (loading lazily initialised code), then:
+
+* cold: the median of 5 calls (3 with --quick), each on focal elements that the process
+  has not seen before, so belief compiles (and caches) its combination plan inside the
+  timed call, as it does for every new set of focal elements.  For the batch cases the
+  columns of every source are put in a fresh order, which gives belief new focal lists
+  with the same contents;
+* warm: the median of 5 (3) more calls on the inputs of the last cold call (plan cached).
+
+The peers keep no plans; they are timed on the same fresh inputs (median).  Slow peers
+are capped: in (a) and (b) they stop after about 4 s (1 s) of calls, at least one; in
+(c) and (d) they loop over the first rows only (1 000 pairs, 100 rows) and the rate is
+extrapolated.  Only the combination call is timed, not building the inputs.  Ratios are
+the fastest peer's time divided by belief's (above 1, belief is faster).  The targets
+use the warm times, the steady state in which a plan compiled once for a set of focal
+elements serves every later call (a tracker, or any repeated fusion); the cold times,
+which include compiling the plan, are printed beside them.  Targets: (a) k = 128 at
+least 10 times faster than the fastest peer; (b) PCR6
+of 10 sources at least 100 times faster than evidencelib; (c) at least 5 million pairs
+per second; (d) at least 100 000 rows per second for each rule.  A further target is
+that every peer that implements a case agrees with belief.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import gc
+import importlib.util
+import io
+import json
+import multiprocessing
+import platform
+import statistics
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from itertools import combinations
+from pathlib import Path
+
+import numpy as np
+
+# Measure the checkout this script belongs to, installed or not (spawned children inherit sys.path).
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+PEERS = ("evidencelib", "pyds", "pybelief")
+DISTRIBUTIONS = {"evidencelib": "evidencelib", "pyds": "py-dempster-shafer", "pybelief": "pybelief"}
+TOLERANCE = 1e-9
+SEED = 20_240_611
+
+FULL = {"a_sizes": (8, 32, 128), "b_sizes": tuple(range(2, 11)), "c_rows": 100_000, "c_peer_rows": 1_000,
+        "d_rows": 10_000, "d_peer_rows": 100, "cold": 5, "warm": 5, "peer_budget": 4.0}
+QUICK = {"a_sizes": (8, 32), "b_sizes": tuple(range(2, 7)), "c_rows": 10_000, "c_peer_rows": 200,
+         "d_rows": 1_000, "d_peer_rows": 10, "cold": 3, "warm": 3, "peer_budget": 1.0}
+
+# Targets (on warm times: plan compiled and cached).
+A_K, A_RATIO = 128, 10.0
+B_S, B_RATIO = 10, 100.0
+C_ROWS, C_RATE = 100_000, 5e6
+D_ROWS, D_RATE = 10_000, 1e5
+D_RULES = ("dsmc", "pcr6", "r_rule")
+#: evidencelib's method for each belief rule (its dsmc() is defined on the free model only;
+#: on a hybrid frame its conjunctive rule is the same computation, conflict kept on ∅).
+EVIDENCELIB_METHOD = {"dempster": "dempster", "pcr5": "pcr5", "pcr6": "pcr6", "dsmc": "conjunctive"}
+SUPPORTS = {  # (case, rule) -> peers that implement it
+    ("a", "dempster"): PEERS, ("b", "pcr5"): ("evidencelib",), ("b", "pcr6"): ("evidencelib",),
+    ("c", "dempster"): PEERS, ("d", "dsmc"): ("evidencelib",), ("d", "pcr6"): ("evidencelib",), ("d", "r_rule"): (),
+}
+
+A_NAMES = tuple(f"h{i}" for i in range(1, 11))
+ABC = ("a", "b", "c")
+TRACK_NAMES = tuple(f"t{i}" for i in range(1, 11)) + ("FA",)
+# Near-Bayesian sources of case (b): the three singletons, or two singletons and a union.
+B_STRUCTURES = [("a", "b", "c")] + [(x, y, z) for x, y in combinations(ABC, 2) for z in ("a|b", "a|c", "b|c", "a|b|c")]
+C_FOCAL = tuple("|".join(h for i, h in enumerate(ABC) if mask >> i & 1) for mask in range(1, 8))
+
+
+# -- inputs (library-neutral: a source is {"h1|h3": mass}; a batch is focal names and an (N, K) array) ------
+def seed_of(case: str, size: int) -> int:
+    return SEED + 1000 * (ord(case) - ord("a")) + size
+
+
+def subset_name(mask: int, names=A_NAMES) -> str:
+    return "|".join(h for i, h in enumerate(names) if mask >> i & 1)
+
+
+def inputs_a(k: int, count: int) -> list[list[dict[str, float]]]:
+    rng = np.random.default_rng(seed_of("a", k))
+    samples, seen = [], set()
+    while len(samples) < count:
+        sample = []
+        for _ in range(2):
+            masks = rng.choice(np.arange(1, 1 << len(A_NAMES)), size=k, replace=False)
+            weights = rng.uniform(0.1, 1.0, size=k)
+            weights /= weights.sum()
+            sample.append({subset_name(int(m)): float(w) for m, w in zip(masks, weights)})
+        key = tuple(frozenset(source) for source in sample)
+        if key not in seen:
+            seen.add(key)
+            samples.append(sample)
+    return samples
+
+
+def inputs_b(s: int, count: int) -> list[list[dict[str, float]]]:
+    rng = np.random.default_rng(seed_of("b", s))
+    samples, seen = [], set()
+    while len(samples) < count:
+        kinds = tuple(0 if rng.random() < 0.5 else int(rng.integers(1, len(B_STRUCTURES))) for _ in range(s))
+        if kinds in seen:
+            continue
+        seen.add(kinds)
+        sample = []
+        for kind in kinds:
+            weights = rng.uniform(0.1, 1.0, size=3)
+            weights /= weights.sum()
+            sample.append(dict(zip(B_STRUCTURES[kind], map(float, weights))))
+        samples.append(sample)
+    return samples
+
+
+def inputs_batch(case: str, rows: int, count: int) -> tuple[tuple[str, ...], list[np.ndarray], list[list[np.ndarray]]]:
+    """Focal names, the sources' (rows, K) masses in that order, and per sample a column order per source."""
+    focal, sources = (C_FOCAL, 2) if case == "c" else (TRACK_NAMES, 3)
+    rng = np.random.default_rng(seed_of(case, rows))
+    values = [rng.dirichlet(np.ones(len(focal)), size=rows) for _ in range(sources)]
+    orders, seen = [], set()
+    while len(orders) < count:
+        sample = [rng.permutation(len(focal)) for _ in range(sources)]
+        key = tuple(tuple(p.tolist()) for p in sample)
+        if key not in seen:
+            seen.add(key)
+            orders.append(sample)
+    return focal, values, orders
+
+
+# -- libraries: model, conversion, call, canonical result -------------------------------------------------
+def canonical(terms) -> str:
+    """Minimal conjunctions (iterables of names) -> one string, the same for every library."""
+    parts = sorted("&".join(sorted(term)) for term in terms)
+    return "|".join(parts) if parts else "∅"
+
+
+class Library:
+    """One library's view of a case: builds its sources, combines them, reads the result."""
+
+    def __init__(self, name: str, space: str) -> None:
+        self.name = name
+        names = {"shafer10": A_NAMES, "shafer3": ABC, "tracking10": TRACK_NAMES}[space]
+        self.names = names
+        if name == "belief":
+            import belief
+
+            self.lib = belief
+            self.model = (belief.Model.for_targets(10) if space == "tracking10"
+                          else belief.Model.shafer(belief.Frame(list(names))))
+        elif name == "evidencelib":
+            import evidencelib
+
+            self.frame = (evidencelib.Frame.hybrid(list(names), empty=[f"{t}&FA" for t in names[:-1]])
+                          if space == "tracking10" else evidencelib.Frame.dst(list(names)))
+        elif name == "pyds":
+            with contextlib.redirect_stderr(io.StringIO()):  # it warns that SciPy is absent (not needed here)
+                import pyds
+            self.lib = pyds
+        else:
+            import pybelief
+
+            self.lib = pybelief
+            self.bit = {h: 1 << i for i, h in enumerate(names)}
+
+    def source(self, masses: dict[str, float]):
+        if self.name == "belief":
+            return self.lib.MassFunction(masses, model=self.model)
+        if self.name == "evidencelib":
+            return self.frame.mass(masses)
+        if self.name == "pyds":
+            return self.lib.MassFunction({frozenset(key.split("|")): v for key, v in masses.items()})
+        return self.lib.MassFunction(self.names, {sum(self.bit[h] for h in key.split("|")): v
+                                                  for key, v in masses.items()})
+
+    def batch(self, focal, values):
+        return self.lib.MassBatch(list(focal), values, model=self.model)
+
+    def combiner(self, rule: str):
+        if self.name == "belief":
+            combine = self.lib.combine
+            return lambda sources: combine(*sources, rule=rule)
+        if self.name == "evidencelib":
+            method = EVIDENCELIB_METHOD[rule]
+            return lambda sources: getattr(sources[0], method)(*sources[1:])
+        if self.name == "pyds":  # normalization=True (the default) is Dempster's rule
+            return lambda sources: sources[0].combine_conjunctive(sources[1])
+        return lambda sources: sources[0].combine_dempster(sources[1])
+
+    def read(self, result) -> dict[str, float]:
+        """A combined mass function as {canonical element: mass}."""
+        if self.name == "belief":
+            return {self.key(e): float(v) for e, v in zip(result.focal, result.values.tolist())}
+        if self.name == "evidencelib":
+            out = {}
+            for prop, value in result.items():
+                text = str(prop)
+                out[canonical([] if text == "empty" else [term.split("&") for term in text.split("|")])] = value
+            return out
+        if self.name == "pyds":
+            return {canonical([[h] for h in hyp]): v for hyp, v in result.items()}
+        return {canonical([[h] for h in self.names if mask & self.bit[h]]): v
+                for mask, v in result.focal_elements().items()}
+
+    def key(self, element) -> str:
+        hyps = element.frame.hypotheses
+        return canonical([[h for i, h in enumerate(hyps) if term >> i & 1] for term in element.terms])
+
+    def read_rows(self, result, rows: int) -> list[dict[str, float]]:
+        keys = [self.key(e) for e in result.focal]
+        return [{k: v for k, v in zip(keys, row) if v != 0.0} for row in result.values[:rows].tolist()]
+
+
+def timed(function, argument) -> tuple[float, object]:
+    gc.collect()
+    start = time.perf_counter()
+    result = function(argument)
+    return time.perf_counter() - start, result
+
+
+# -- measurements (each runs in a fresh process) -----------------------------------------------------
+def measure_single(library: str, case: str, rule: str, size: int, cold: int, warm: int, budget: float) -> dict:
+    """Cases (a) and (b): one combination per call."""
+    samples = inputs_a(size, cold + 1) if case == "a" else inputs_b(size, cold + 1)
+    lib = Library(library, "shafer10" if case == "a" else "shafer3")
+    call = lib.combiner(rule)
+    sources = [[lib.source(s) for s in sample] for sample in samples]
+    first, _ = timed(call, sources[0])                    # untimed in the figures: lazy initialisation
+    cold_times, results = [], []
+    for sample in sources[1:]:
+        seconds, result = timed(call, sample)
+        cold_times.append(seconds)
+        results.append(lib.read(result))
+        if library != "belief" and sum(cold_times) > budget:
+            break
+    warm_times = []
+    if library == "belief":
+        last = sources[len(cold_times)]
+        warm_times = [timed(call, last)[0] for _ in range(warm)]
+    return {"first_s": first, "cold_s": statistics.median(cold_times), "cold_runs": len(cold_times),
+            "warm_s": statistics.median(warm_times) if warm_times else None, "warm_runs": len(warm_times),
+            "results": results}
+
+
+def measure_batch_belief(case: str, rule: str, rows: int, check_rows: int, cold: int, warm: int) -> dict:
+    """Cases (c) and (d) for belief: all rows in one call, columns in a fresh order for every cold call."""
+    focal, values, orders = inputs_batch(case, rows, cold + 1)
+    lib = Library("belief", "shafer3" if case == "c" else "tracking10")
+    call = lib.combiner(rule)
+
+    def sources(i):
+        return [lib.batch([focal[j] for j in order], v[:, order]) for v, order in zip(values, orders[i])]
+
+    first, _ = timed(call, sources(0))
+    cold_times, results = [], None
+    for i in range(1, cold + 1):
+        batch = sources(i)
+        seconds, result = timed(call, batch)
+        cold_times.append(seconds)
+        if results is None:
+            results = lib.read_rows(result, check_rows)
+        del result
+    warm_times = [timed(call, batch)[0] for _ in range(warm)]
+    return {"rows": rows, "first_s": first, "cold_s": statistics.median(cold_times), "cold_runs": cold,
+            "warm_s": statistics.median(warm_times), "warm_runs": warm, "results": [results]}
+
+
+def measure_batch_peer(library: str, case: str, rule: str, rows: int, peer_rows: int, budget: float) -> dict:
+    """Cases (c) and (d) for a peer: a loop over the first ``peer_rows`` rows, timed and extrapolated."""
+    focal, values, _ = inputs_batch(case, rows, 1)
+    lib = Library(library, "shafer3" if case == "c" else "tracking10")
+    call = lib.combiner(rule)
+    pairs = [[lib.source(dict(zip(focal, map(float, v[r])))) for v in values] for r in range(peer_rows)]
+
+    def loop(items):
+        return [call(sources) for sources in items]
+
+    timed(loop, pairs[:max(1, peer_rows // 10)])
+    times, results = [], None
+    while not times or (len(times) < 3 and sum(times) < budget):
+        seconds, out = timed(loop, pairs)
+        times.append(seconds)
+        if results is None:
+            results = [lib.read(r) for r in out]
+    return {"rows": peer_rows, "cold_s": statistics.median(times), "cold_runs": len(times),
+            "warm_s": None, "results": [results]}
+
+
+def in_fresh_process(function, *args) -> dict:
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
+        return pool.submit(function, *args).result()
+
+
+# -- agreement ----------------------------------------------------------------------------------------
+def deviation(ours: list, theirs: list) -> float:
+    """Largest |Δ| over the inputs both computed; results are {element: mass} or lists of them (rows)."""
+    worst = 0.0
+    for a, b in zip(ours, theirs):
+        pairs = zip(a, b) if isinstance(a, list) else [(a, b)]
+        for x, y in pairs:
+            if not x or not y:           # a combination is never empty: something went wrong
+                return float("inf")
+            for key in set(x) | set(y):
+                worst = max(worst, abs(x.get(key, 0.0) - y.get(key, 0.0)))
+    return worst
+
+
+def compare(row: dict, belief: dict) -> None:
+    row["agreement"] = {}
+    for peer, data in row["peers"].items():
+        if data is None:
+            continue
+        worst = deviation(belief["results"], data["results"])
+        compared = min(len(belief["results"]), len(data["results"]))
+        if isinstance(belief["results"][0], list):
+            compared = min(len(belief["results"][0]), len(data["results"][0]))
+        row["agreement"][peer] = {"max_abs_diff": worst, "compared": compared, "agree": worst <= TOLERANCE}
+        del data["results"]
+    del belief["results"]
+
+
+def fastest(row: dict) -> tuple[str | None, float | None]:
+    """The fastest peer and its time per unit (per call, or per row for the batch cases)."""
+    best = None
+    for peer, data in row["peers"].items():
+        if data is not None:
+            per = data["cold_s"] / data.get("rows", 1)
+            if best is None or per < best[1]:
+                best = (peer, per)
+    return best if best else (None, None)
+
+
+def add_ratios(row: dict) -> None:
+    peer, per = fastest(row)
+    b = row["belief"]
+    rows = b.get("rows", 1)
+    row["fastest_peer"] = peer
+    row["ratio_cold"] = per / (b["cold_s"] / rows) if peer else None
+    row["ratio_warm"] = per / (b["warm_s"] / rows) if peer and b["warm_s"] else None
+
+
+# -- the cases ----------------------------------------------------------------------------------------
+def run_case(case: str, sizes: dict, have: dict, log) -> list[dict]:
+    out = []
+    plan = {"a": [("dempster", k) for k in sizes["a_sizes"]],
+            "b": [(rule, s) for s in sizes["b_sizes"] for rule in ("pcr5", "pcr6")],
+            "c": [("dempster", sizes["c_rows"])],
+            "d": [(rule, sizes["d_rows"]) for rule in D_RULES]}[case]
+    for rule, size in plan:
+        log(f"  ({case}) {rule} {size}")
+        row = {"case": case, "rule": rule, "size": size, "peers": {}}
+        supported = [p for p in SUPPORTS[(case, rule)] if have[p]]
+        if case in "ab":
+            row["tuples"] = size * size if case == "a" else 3 ** size
+            belief = in_fresh_process(measure_single, "belief", case, rule, size, sizes["cold"], sizes["warm"], 0.0)
+            for peer in PEERS:
+                row["peers"][peer] = (in_fresh_process(measure_single, peer, case, rule, size, sizes["cold"], 0,
+                                                       sizes["peer_budget"]) if peer in supported else None)
+        else:
+            peer_rows = sizes[f"{case}_peer_rows"]
+            check = peer_rows if supported else 1
+            belief = in_fresh_process(measure_batch_belief, case, rule, size, check, sizes["cold"], sizes["warm"])
+            for peer in PEERS:
+                row["peers"][peer] = (in_fresh_process(measure_batch_peer, peer, case, rule, size, peer_rows,
+                                                       sizes["peer_budget"]) if peer in supported else None)
+        row["belief"] = belief
+        compare(row, belief)
+        add_ratios(row)
+        out.append(row)
+    return out
+
+
+# -- targets ------------------------------------------------------------------------------------------
+def find(rows, case, rule, size):
+    return next((r for r in rows if r["case"] == case and r["rule"] == rule and r["size"] == size), None)
+
+
+def targets(rows: list[dict], cases: str, have: dict) -> list[dict]:
+    found = []
+
+    def target(name, value, ok, cold=None, skip=None, unit="x"):
+        status = "SKIP" if skip else ("PASS" if ok else "FAIL")
+        found.append({"target": name, "value": value, "cold_value": cold, "unit": unit, "status": status,
+                      "note": skip})
+
+    def why_skipped(case, row, needs_peer):
+        if case not in cases:
+            return f"case ({case}) not run"
+        if row is None:
+            return "size not run (--quick)"
+        if needs_peer and row["fastest_peer"] is None:
+            return "no peer installed"
+        return None
+
+    r = find(rows, "a", "dempster", A_K)
+    skip = why_skipped("a", r, True)
+    target(f"(a) Dempster, k = {A_K}: warm call >= {A_RATIO:g}x faster than the fastest peer",
+           r and r["ratio_warm"], r and not skip and r["ratio_warm"] >= A_RATIO, r and r["ratio_cold"], skip)
+    r = find(rows, "b", "pcr6", B_S)
+    skip = why_skipped("b", r, True)
+    target(f"(b) PCR6 of {B_S} sources: warm call >= {B_RATIO:g}x faster than evidencelib",
+           r and r["ratio_warm"], r and not skip and r["ratio_warm"] >= B_RATIO, r and r["ratio_cold"], skip)
+    r = find(rows, "c", "dempster", C_ROWS)
+    skip = why_skipped("c", r, False)
+    speed = r and C_ROWS / r["belief"]["warm_s"]
+    target(f"(c) Dempster on {C_ROWS:,} pairs (3 hypotheses): warm call >= {C_RATE / 1e6:g} M pairs/s",
+           speed, speed is not None and speed >= C_RATE, r and C_ROWS / r["belief"]["cold_s"], skip, "pairs/s")
+    for rule in D_RULES:
+        r = find(rows, "d", rule, D_ROWS)
+        skip = why_skipped("d", r, False)
+        speed = r and D_ROWS / r["belief"]["warm_s"]
+        target(f"(d) {rule}, tracking model, 3 cues, {D_ROWS:,} rows: warm call >= {D_RATE:,.0f} rows/s",
+               speed, speed is not None and speed >= D_RATE, r and D_ROWS / r["belief"]["cold_s"], skip, "rows/s")
+    checks = [a for r in rows for a in r["agreement"].values()]
+    target(f"results agree with every peer that implements the case (|Δ| <= {TOLERANCE:g})",
+           sum(a["agree"] for a in checks), all(a["agree"] for a in checks), None,
+           None if checks else "no peer installed", f"of {len(checks)} comparisons")
+    return found
+
+
+# -- printing -----------------------------------------------------------------------------------------
+def ms(seconds: float | None) -> str:
+    return "-" if seconds is None else f"{seconds * 1e3:.3f}" if seconds < 0.1 else f"{seconds * 1e3:.1f}"
+
+
+def ratio(value: float | None) -> str:
+    if value is None:
+        return "-"
+    return f"{value:.3g}x" if value < 10 else f"{value:.0f}x"
+
+
+def rate(value: float) -> str:
+    return f"{value / 1e6:.2f} M" if value >= 1e6 else f"{value:,.0f}"
+
+
+def agreement(row: dict, peers: list[str]) -> str:
+    parts = []
+    for peer in peers:
+        a = row["agreement"].get(peer)
+        if a is not None:
+            parts.append(f"{peer} {'agree' if a['agree'] else 'DIFFER'} ({a['max_abs_diff']:.1e})")
+    if parts:
+        return ", ".join(parts)
+    return "no peer installed" if SUPPORTS[(row["case"], row["rule"])] else "no peer implements it"
+
+
+def print_table(header: list[tuple[str, int]], lines: list[list[str]]) -> None:
+    print("  ".join(f"{h:>{w}}" for h, w in header))
+    print("-" * (sum(w for _, w in header) + 2 * (len(header) - 1)))
+    for line in lines:
+        print("  ".join(f"{c:>{w}}" for c, (_, w) in zip(line, header)))
+
+
+def print_report(rows: list[dict], found: list[dict], peers: list[str], sizes: dict) -> None:
+    def peer_cell(row, peer):
+        d = row["peers"].get(peer)
+        if d is None:
+            return "-"
+        return ms(d["cold_s"]) + ("" if d["cold_runs"] >= sizes["cold"] else f" ({d['cold_runs']})")
+
+    by_case = {c: [r for r in rows if r["case"] == c] for c in "abcd"}
+    if by_case["a"]:
+        print("(a) Dempster's rule, two sources of k random focal elements, 10 hypotheses, Shafer's model")
+        header = [("k", 4), ("tuples", 7), ("cold ms", 9), ("x", 7), ("warm ms", 9), ("x", 7)]
+        header += [(f"{p} ms", 14) for p in peers]
+        print_table(header, [[str(r["size"]), str(r["tuples"]), ms(r["belief"]["cold_s"]), ratio(r["ratio_cold"]),
+                              ms(r["belief"]["warm_s"]), ratio(r["ratio_warm"])] + [peer_cell(r, p) for p in peers]
+                             for r in by_case["a"]])
+        for r in by_case["a"]:
+            print(f"  k = {r['size']}: {agreement(r, peers)}")
+        print()
+    if by_case["b"]:
+        print("(b) joint PCR5 / PCR6 of s near-Bayesian sources on 3 hypotheses, 3 focal elements each "
+              "(only evidencelib implements them)")
+        header = [("s", 3), ("tuples", 7), ("rule", 5), ("cold ms", 9), ("x", 7), ("warm ms", 9), ("x", 7)]
+        shown = [p for p in peers if p == "evidencelib"]
+        header += [(f"{p} ms", 16) for p in shown] + [("agreement", 28)]
+        print_table(header, [[str(r["size"]), str(r["tuples"]), r["rule"], ms(r["belief"]["cold_s"]),
+                              ratio(r["ratio_cold"]), ms(r["belief"]["warm_s"]), ratio(r["ratio_warm"])]
+                             + [peer_cell(r, p) for p in shown] + [agreement(r, shown)] for r in by_case["b"]])
+        print()
+    if by_case["c"]:
+        r = by_case["c"][0]
+        n = r["size"]
+        print(f"(c) throughput of two-source Dempster, 3 hypotheses, 7 focal elements per source: "
+              f"{n:,} pairs in one MassBatch call for belief;")
+        if peers:
+            print(f"    peers loop over the first {sizes['c_peer_rows']:,} pairs (extrapolated to pairs/s)")
+        header = [("", 12), ("pairs", 8), ("ms", 9), ("pairs/s", 10), ("x", 7)]
+        b = r["belief"]
+        lines = [["belief cold", f"{n:,}", ms(b["cold_s"]), rate(n / b["cold_s"]), ratio(r["ratio_cold"])],
+                 ["belief warm", f"{n:,}", ms(b["warm_s"]), rate(n / b["warm_s"]), ratio(r["ratio_warm"])]]
+        for p in peers:
+            d = r["peers"].get(p)
+            if d is not None:
+                lines.append([p, f"{d['rows']:,}", ms(d["cold_s"]), rate(d["rows"] / d["cold_s"]), ""])
+        print_table(header, lines)
+        print(f"  {agreement(r, peers)} (on {sizes['c_peer_rows']:,} pairs)")
+        print()
+    if by_case["d"]:
+        n = by_case["d"][0]["size"]
+        print(f"(d) tracking batch: 10 targets + FA (Model.for_targets(10)), 3 Bayesian cues, {n:,} rows;")
+        if "evidencelib" in peers:
+            print(f"    evidencelib (hybrid frame, θj∩FA = ∅) loops over the first {sizes['d_peer_rows']:,} rows "
+                  "(extrapolated); its conjunctive rule stands for dsmc")
+        header = [("rule", 7), ("cold ms", 9), ("rows/s", 10), ("x", 7), ("warm ms", 9), ("rows/s", 10), ("x", 7)]
+        shown = [p for p in peers if p == "evidencelib"]
+        header += [(f"{p} rows/s", 18) for p in shown] + [("agreement", 28)]
+        lines = []
+        for r in by_case["d"]:
+            b = r["belief"]
+            line = [r["rule"], ms(b["cold_s"]), rate(n / b["cold_s"]), ratio(r["ratio_cold"]),
+                    ms(b["warm_s"]), rate(n / b["warm_s"]), ratio(r["ratio_warm"])]
+            for p in shown:
+                d = r["peers"].get(p)
+                line.append("-" if d is None else rate(d["rows"] / d["cold_s"]))
+            lines.append(line + [agreement(r, shown)])
+        print_table(header, lines)
+        print()
+    print("Targets (on warm times, plan cached; cold figures, which include compiling the plan, in brackets):")
+    for t in found:
+        value, unit = t["value"], t["unit"]
+        if t["status"] == "SKIP":
+            print(f"{t['status']:<5} {t['target']} ({t['note']})")
+            continue
+        if unit == "x":
+            shown = f"{ratio(value)} (cold {ratio(t['cold_value'])})"
+        elif unit in ("pairs/s", "rows/s"):
+            shown = f"{rate(value)} {unit} (cold {rate(t['cold_value'])} {unit})"
+        else:
+            shown = f"{value} {unit}"
+        print(f"{t['status']:<5} {t['target']}: {shown}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="smaller sizes for a smoke run (targets skipped)")
+    parser.add_argument("--cases", default="a,b,c,d", help="comma-separated cases to run, of a,b,c,d (default all)")
+    parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    parser.add_argument("--check", action="store_true", help="exit 1 if a target fails")
+    args = parser.parse_args(argv)
+    cases = [c.strip() for c in args.cases.split(",") if c.strip()]
+    if not cases or any(c not in "abcd" or len(c) != 1 for c in cases):
+        parser.error("--cases takes a comma-separated list of a, b, c, d")
+    sizes = QUICK if args.quick else FULL
+
+    from importlib.metadata import PackageNotFoundError, version
+
+    have = {p: importlib.util.find_spec(p) is not None for p in PEERS}
+    versions = {}
+    for p in PEERS:
+        try:
+            versions[p] = version(DISTRIBUTIONS[p]) if have[p] else None
+        except PackageNotFoundError:
+            versions[p] = "unknown"
+    peers = [p for p in PEERS if have[p]]
+
+    def log(message):
+        if not args.json:
+            print(message, file=sys.stderr, flush=True)
+
+    if not args.json:
+        print(f"belief vs peers; Python {platform.python_version()}, numpy {np.__version__}")
+        print("peers: " + ", ".join(f"{p} {versions[p]}" + (f" ({DISTRIBUTIONS[p]})" if DISTRIBUTIONS[p] != p else "")
+                                    for p in peers) if peers else "peers: none")
+        for p in PEERS:
+            if not have[p]:
+                print(f"{p} is not installed (pip install \".[bench]\"): its columns are skipped")
+        print(f"Fresh process per measurement; one untimed call first.  cold = median of {sizes['cold']} calls, "
+              "each on focal elements new")
+        print(f"to the process (belief compiles its plan in the call); warm = median of {sizes['warm']} repeats "
+              "of the last one.")
+        print("Peers: median over the same inputs (a count in brackets = fewer calls, capped at about "
+              f"{sizes['peer_budget']:g} s).")
+        print("x = fastest peer's time / belief's time (above 1: belief faster).  Times in ms.")
+        print()
+    start = time.perf_counter()
+    rows = []
+    for case in cases:
+        rows.extend(run_case(case, sizes, have, log))
+    found = targets(rows, "".join(cases), have)
+    if args.json:
+        print(json.dumps({"python": platform.python_version(), "numpy": np.__version__, "peers": versions,
+                          "quick": args.quick, "sizes": sizes, "rows": rows, "targets": found}, indent=2))
+    else:
+        print_report(rows, found, peers, sizes)
+        print(f"\n(total {time.perf_counter() - start:.0f} s)")
+    failed = any(t["status"] == "FAIL" for t in found)
+    return 1 if failed and args.check else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
