@@ -213,9 +213,9 @@ class TuplePlan:
 
 def gather_product(values: Sequence[np.ndarray], columns: Sequence[np.ndarray]) -> np.ndarray:
     """Π_i values[i][:, columns[i]], shape (N, len(columns[0]))."""
-    result = np.take(values[0], columns[0], axis=1)
+    result = values[0].take(columns[0], axis=1)
     for v, c in zip(values[1:], columns[1:]):
-        result *= np.take(v, c, axis=1)
+        result *= v.take(c, axis=1)
     return result
 
 

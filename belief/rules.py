@@ -301,7 +301,10 @@ def _prune(batch: MassBatch) -> MassBatch:
 
 
 def _fold(batches: Sequence[MassBatch], model: Model, key: str) -> MassBatch:
-    result = _prune(_tuple_targets_rule(batches[:2], model, key))
+    result = _tuple_targets_rule(batches[:2], model, key)
+    if len(batches) == 2:
+        return result
+    result = _prune(result)
     for b in batches[2:]:
         result = _prune(_tuple_targets_rule([result, b.under(model) if b.model != model else b], model, key))
     return result
@@ -364,7 +367,7 @@ def _move_empty(result: MassBatch, to: Element | None, model: Model, rule: str) 
         k = next(i for i, e in enumerate(focal) if not e.terms)
     values = result.values
     if to is None:
-        kept = np.delete(values, k, axis=1)
+        kept = values[:, 1:] if k == 0 else np.delete(values, k, axis=1)
         scale = kept.sum(axis=1)
         dead = ~(scale > 0)
         if dead.any():
