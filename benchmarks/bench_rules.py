@@ -34,7 +34,7 @@ on other inputs (loading lazily initialised code), then:
   timed call, as it does for every new set of focal elements.  For the batch cases the
   columns of every source are put in a fresh order, which gives belief new focal lists
   with the same contents;
-* warm: the median of 5 (3) more calls on the inputs of the last cold call (plan cached).
+* warm: the median of 25 (3) more calls on the inputs of the last cold call (plan cached).
 
 The peers keep no plans; they are timed on the same fresh inputs (median).  Slow peers
 are capped: in (a) and (b) they stop after about 4 s (1 s) of calls, at least one; in
