@@ -70,6 +70,14 @@ def _print_json(data: Any) -> None:
     print(json.dumps(data, indent=2, ensure_ascii=False))
 
 
+def _print_mass(m: MassFunction, as_json: bool) -> None:
+    """A resulting mass function: a BBA file with ``--json``, else a table."""
+    if as_json:
+        _print_json(m.to_dict())
+    else:
+        print(_table(["proposition", "mass"], [(str(e), v) for e, v in m.items()]))
+
+
 def _table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
     cells = [[str(h) for h in header]] + [[_fmt(c) for c in row] for row in rows]
     widths = [max(len(row[i]) for row in cells) for i in range(len(header))]
@@ -172,10 +180,7 @@ def _cmd_transform(args: argparse.Namespace) -> int:
         result = m.discount(args.discount)
     else:
         result = m.condition(args.condition, normalized=args.normalized)
-    if args.json:
-        _print_json(result.to_dict())
-    else:
-        print(_table(["proposition", "mass"], [(str(e), v) for e, v in result.items()]))
+    _print_mass(result, args.json)
     return 0
 
 
@@ -199,10 +204,7 @@ def _cmd_combine(args: argparse.Namespace) -> int:
         if source.model != sources[0].model:
             raise FormatError(f"{args.bba[k - 1]} was elicited under another frame or model than {args.bba[0]}")
     result = combine(*sources, rule=info, model=model, **options)
-    if args.json:
-        _print_json(result.to_dict())
-    else:
-        print(_table(["proposition", "mass"], [(str(e), v) for e, v in result.items()]))
+    _print_mass(result, args.json)
     return 0
 
 
