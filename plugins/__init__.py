@@ -1,0 +1,1 @@
+"""Applications built on :mod:`belief`.  They import it; it never imports them."""
