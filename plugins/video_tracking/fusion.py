@@ -76,9 +76,9 @@ def cue_masses(log_likelihoods: np.ndarray) -> np.ndarray:
 
     Examples
     --------
-    >>> cue_masses(np.log([[0.6, 0.3, 0.1], [1e-300, 1e-301, 0.0]]))
-    array([[0.6       , 0.3       , 0.1       ],
-           [0.90909091, 0.09090909, 0.        ]])
+    >>> cue_masses(np.array([[np.log(0.6), np.log(0.3), np.log(0.1)], [-700.0, -700.0, -np.inf]]))
+    array([[0.6, 0.3, 0.1],
+           [0.5, 0.5, 0. ]])
     """
     values = np.asarray(log_likelihoods, dtype=np.float64)
     if values.ndim != 2 or values.shape[1] < 2:
