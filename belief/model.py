@@ -274,13 +274,6 @@ def _restore_model(frame: Frame, forbidden: tuple[int, ...], kind: str, false_al
     return Model(frame, forbidden, kind=kind, false_alarm=false_alarm)
 
 
-def check_same_frame(*frames: Frame) -> None:
-    first = frames[0]
-    for other in frames[1:]:
-        if other != first:
-            raise FrameError(f"frames differ: {list(first.hypotheses)} and {list(other.hypotheses)}")
-
-
 @lru_cache(maxsize=65536)
 def _count_regions(terms: tuple[int, ...], forbidden: tuple[int, ...], universe: int) -> int:
     """Number of sets S ⊆ universe with some term ⊆ S and no forbidden conjunction ⊆ S.

@@ -310,14 +310,6 @@ def _fold(batches: Sequence[MassBatch], model: Model, key: str) -> MassBatch:
     return result
 
 
-def _meet_targets(plan: TuplePlan) -> list[Element]:
-    return plan.meets
-
-
-def _join_targets(plan: TuplePlan) -> list[Element]:
-    return plan.joins
-
-
 def _dubois_prade_targets(plan: TuplePlan) -> list[Element]:
     return [m if m.terms else j for m, j in zip(plan.meets, plan.joins)]
 
@@ -347,8 +339,6 @@ def _dsmh_targets(plan: TuplePlan) -> list[Element]:
 
 
 _TARGETS: dict[str, Callable[[TuplePlan], list[Element]]] = {
-    "meet": _meet_targets,
-    "join": _join_targets,
     "dubois_prade": _dubois_prade_targets,
     "dsmh": _dsmh_targets,
 }
