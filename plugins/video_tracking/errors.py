@@ -1,0 +1,24 @@
+"""Exceptions of the video-tracking plugin.
+
+They belong to the :class:`belief.errors.BeliefError` family, so the ``belief`` command
+line turns them into one-line messages, and also derive from ``ValueError`` so that
+generic ``except ValueError`` code keeps working.
+"""
+
+from __future__ import annotations
+
+from belief.errors import BeliefError
+
+__all__ = ["TrackingError", "TrackFileError", "UnknownCueError"]
+
+
+class TrackingError(BeliefError, ValueError):
+    """Bad input to the tracking plugin (malformed boxes, tracks or settings)."""
+
+
+class TrackFileError(TrackingError):
+    """A track or ground-truth file is missing, unreadable, empty or malformed."""
+
+
+class UnknownCueError(TrackingError):
+    """A cue name that the cue registry does not know; the message lists the known names."""
