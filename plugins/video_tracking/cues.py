@@ -1,0 +1,839 @@
+"""Image cues of the tracker: location, colour and foreground-masked colour (SPEC B.2–B.4, Part D).
+
+Every cue scores all particles of all targets at once against every hypothesis of the frame
+{θ_1, …, θ_τ, FA} and returns *log*-likelihoods of shape ``(P, τ + 1)``, the last column
+being the false alarm FA.  :class:`plugins.video_tracking.fusion.CueFusion` turns each row
+into a Bayesian mass function (W (20)–(21)) and combines the cues.
+
+Three cues are provided, all registered in :data:`CUES` (see :func:`make_cue`):
+
+* ``"location"`` — :class:`LocationCue`, distance to the previous estimates (W (22)–(24));
+* ``"colour"`` — :class:`ColourCue`, Bhattacharyya similarity of kernel-weighted colour
+  histograms to per-target templates and to a false-alarm histogram (W (16)–(19));
+* ``"foreground"`` — :class:`ForegroundColourCue`, the same histograms counting only the
+  foreground pixels of a background model (L (16)–(17)).
+
+Pixel geometry
+--------------
+Pixel (column i, row j) covers the square [i, i+1) × [j, j+1).  A box ``(x, y, w, h)`` in
+0-based pixel coordinates therefore has centre ``(x + w/2, y + h/2)`` (:func:`box_centres`)
+and half-sizes ``(w/2, h/2)``, and a point ``(px, py)`` falls in pixel ``(⌊px⌋, ⌊py⌋)``.
+The box of particle p has size ``sizes[owner[p]] * exp(log_scale[p])``.
+
+Appearance cues hold one template per target.  A tracker sets them all at once with
+``set_templates`` or lets targets be born and die with ``add_target`` / ``remove_target``;
+target j of every call to ``log_likelihoods`` is row j of the templates, so the tracker
+keeps its targets and the cue's templates in the same order.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from functools import lru_cache
+from typing import ClassVar, Protocol, runtime_checkable
+
+import numpy as np
+
+from plugins.video_tracking.errors import TrackingError, UnknownCueError
+
+__all__ = [
+    "Observation",
+    "Cue",
+    "AppearanceCue",
+    "LocationConfig",
+    "LocationCue",
+    "ColourConfig",
+    "ColourCue",
+    "ForegroundColourCue",
+    "CUES",
+    "make_cue",
+    "box_centres",
+    "colour_bins",
+    "kernel_grid",
+    "kernel_histograms",
+    "bhattacharyya",
+    "false_alarm_histogram",
+    "LOCATION_FA_MODES",
+    "FA_HISTOGRAMS",
+]
+
+#: How the location cue measures "away from the targets" for FA (SPEC B.3, W (24)).
+LOCATION_FA_MODES = ("centroid", "nearest")
+
+#: How the false-alarm colour histogram removes the target colours from the scene (W (18)).
+FA_HISTOGRAMS = ("subtract", "counts")
+
+#: Joint RGB histograms have bins³ bins; 16³ = 4096 (the largest of the papers, C) keeps a
+#: (P, B) float array of 800 particles near 26 MB.
+MAX_BINS_PER_CHANNEL = 16
+
+STATE_COLUMNS = 5  # cx, cy, vx, vy, log_scale
+
+#: Residuals of W (18) at most this fraction of the scene are rounding, not colours.
+RESIDUAL_TOLERANCE = 1e-12
+
+#: Log-scales are clipped to ±this before exp (see :func:`_particle_sizes`).
+MAX_ABS_LOG_SCALE = 30.0
+
+
+# -- the observation of one frame -----------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class Observation:
+    """What the cues see of one frame.
+
+    Attributes
+    ----------
+    image : ndarray of uint8, shape (H, W, 3)
+        The current frame, BGR (OpenCV order).
+    foreground : ndarray of bool, shape (H, W), or None
+        The background model's foreground mask (needed by the foreground cue only).
+    centres : ndarray, shape (τ, 2)
+        The previous estimated centres ``(cx, cy)`` of all targets.
+    sizes : ndarray, shape (τ, 2)
+        The base box sizes ``(w, h)`` of all targets; a particle scales them by ``exp(log_scale)``.
+    previous_particles : ndarray, shape (Q, 2)
+        Centres of all particles of all targets at t − 1 after resampling (for d_max, W (23)).
+
+    Examples
+    --------
+    >>> obs = Observation(np.zeros((4, 6, 3), np.uint8), None, [[2.0, 2.0]], [[2.0, 2.0]], np.zeros((0, 2)))
+    >>> obs.n_targets, obs.centres.dtype
+    (1, dtype('float64'))
+    """
+
+    image: np.ndarray
+    foreground: np.ndarray | None
+    centres: np.ndarray
+    sizes: np.ndarray
+    previous_particles: np.ndarray
+
+    def __post_init__(self) -> None:
+        image = _checked_image(self.image)
+        object.__setattr__(self, "image", image)
+        if self.foreground is not None:
+            object.__setattr__(self, "foreground", _checked_mask(self.foreground, image.shape[:2]))
+        centres = _points("centres", self.centres)
+        sizes = _points("sizes", self.sizes)
+        if centres.shape != sizes.shape:
+            raise TrackingError(f"centres and sizes must both have shape (τ, 2), got {centres.shape} and {sizes.shape}")
+        if (sizes <= 0).any():
+            raise TrackingError("box sizes must be positive")
+        object.__setattr__(self, "centres", centres)
+        object.__setattr__(self, "sizes", sizes)
+        object.__setattr__(self, "previous_particles", _points("previous_particles", self.previous_particles))
+
+    @property
+    def n_targets(self) -> int:
+        """τ, the number of targets."""
+        return self.centres.shape[0]
+
+
+def _checked_image(image) -> np.ndarray:
+    image = np.asarray(image)
+    if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
+        raise TrackingError(f"the image must be a (H, W, 3) uint8 array, got shape {image.shape} dtype {image.dtype}")
+    if image.shape[0] == 0 or image.shape[1] == 0:
+        raise TrackingError(f"the image is empty (shape {image.shape})")
+    return image
+
+
+def _checked_mask(mask, shape: tuple[int, int]) -> np.ndarray:
+    mask = np.asarray(mask)
+    if mask.shape != shape or mask.dtype != np.bool_:
+        raise TrackingError(f"the foreground mask must be a bool array of shape {shape}, got shape {mask.shape} "
+                            f"dtype {mask.dtype} (use mask > 0 for a 0/255 image)")
+    return mask
+
+
+def _points(name: str, values) -> np.ndarray:
+    points = np.asarray(values, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 2:
+        raise TrackingError(f"{name} must have shape (n, 2), got {points.shape}")
+    if not np.isfinite(points).all():
+        raise TrackingError(f"{name} must be finite")
+    return points
+
+
+def _particles(obs: Observation, states, owner) -> tuple[np.ndarray, np.ndarray]:
+    """Checked float states (P, 5) and integer owners (P,)."""
+    states = np.asarray(states, dtype=np.float64)
+    if states.ndim != 2 or states.shape[1] != STATE_COLUMNS:
+        raise TrackingError(f"states must have shape (P, 5) (cx, cy, vx, vy, log_scale), got {states.shape}")
+    if not np.isfinite(states).all():
+        raise TrackingError("particle states must be finite")
+    owner = np.asarray(owner)
+    if owner.shape != (states.shape[0],) or (owner.size and not np.issubdtype(owner.dtype, np.integer)):
+        raise TrackingError(f"owner must be {states.shape[0]} integer target indices, "
+                            f"got shape {owner.shape} dtype {owner.dtype}")
+    owner = owner.astype(np.intp)
+    if owner.size and (owner.min() < 0 or owner.max() >= obs.n_targets):
+        raise TrackingError(f"particle owners must be target indices 0..{obs.n_targets - 1}")
+    return states, owner
+
+
+# -- the cue interface ----------------------------------------------------------------------------
+@runtime_checkable
+class Cue(Protocol):
+    """A cue scores every particle against every hypothesis {θ_1, …, θ_τ, FA} (SPEC Part D)."""
+
+    name: str
+
+    def log_likelihoods(self, obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
+        """Log-likelihoods of P particles.
+
+        Parameters
+        ----------
+        obs : Observation
+        states : ndarray, shape (P, 5)
+            Columns cx, cy, vx, vy, log_scale, for all particles of all targets.
+        owner : ndarray of int, shape (P,)
+            The target index of each particle.
+
+        Returns
+        -------
+        ndarray, shape (P, τ + 1)
+            log p_1 … log p_τ, log p_FA.
+        """
+        ...
+
+
+@runtime_checkable
+class AppearanceCue(Cue, Protocol):
+    """A cue with one appearance template per target, built when the target is born."""
+
+    def set_templates(self, image: np.ndarray, boxes: np.ndarray, foreground: np.ndarray | None = None) -> None:
+        """Replace all templates by those of ``boxes`` (τ, 4) ``x, y, w, h`` in ``image``."""
+        ...
+
+    def add_target(self, image: np.ndarray, box, foreground: np.ndarray | None = None) -> int:
+        """Append the template of a new target; returns its index."""
+        ...
+
+    def remove_target(self, index: int) -> None:
+        """Forget target ``index``; the later targets move down by one."""
+        ...
+
+
+# -- configuration checks -------------------------------------------------------------------------
+def _positive(owner: str, name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TrackingError(f"{owner}.{name} must be a positive number, got {value!r}")
+    if not math.isfinite(value) or value <= 0:
+        raise TrackingError(f"{owner}.{name} must be a positive finite number, got {value!r}")
+    return float(value)
+
+
+def _choice(owner: str, name: str, value, choices: tuple[str, ...]) -> None:
+    if value not in choices:
+        raise TrackingError(f"{owner}.{name} must be one of {', '.join(choices)}, got {value!r}")
+
+
+def _count(owner: str, name: str, value) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise TrackingError(f"{owner}.{name} must be a positive integer, got {value!r}")
+    return int(value)
+
+
+# -- location cue ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class LocationConfig:
+    """Settings of the location cue.
+
+    Attributes
+    ----------
+    sigma : float
+        σ_loc in pixels of the Gaussians of W (22) and W (23) (SPEC default 10 px).
+    fa_mode : {"centroid", "nearest"}
+        FA distance to the centroid of the τ previous centres (W (24) generalised), or to the
+        nearest previous centre; d_max is measured the same way.
+    """
+
+    sigma: float = 10.0
+    fa_mode: str = "centroid"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "sigma", _positive("LocationConfig", "sigma", self.sigma))
+        _choice("LocationConfig", "fa_mode", self.fa_mode, LOCATION_FA_MODES)
+
+
+class LocationCue:
+    """Where a particle lies with respect to the previous estimates (W (22)–(24)).
+
+    Target j: log p_j = −‖x − ĉ_j‖² / (2σ²), the log of G(‖x − ĉ_j‖; σ) (W (22)), with x the
+    particle's propagated centre and ĉ_j target j's estimate at t − 1.
+
+    FA: log p_FA = −max(d_max − d, 0)² / (2σ²) (W (23)), with d the distance of x to the
+    centroid c̄ of the τ previous centres (W (24); or to the nearest centre with
+    ``fa_mode="nearest"``), and d_max the largest such distance among all particles of t − 1,
+    floored at σ.  FA grows as a particle moves away from the targets; the clamp keeps it at
+    its maximum, log p_FA = 0, outside the circle of radius d_max instead of letting it fall
+    again (SPEC B.3).
+
+    Examples
+    --------
+    Targets at (100, 50) and (140, 70), so c̄ = (120, 60); the particles of t − 1 reach
+    (90, 45), so d_max = √1125 ≈ 33.5.  A particle on target 1 is at d = √500 from c̄:
+
+    >>> obs = Observation(np.zeros((120, 200, 3), np.uint8), None,
+    ...                   centres=[[100, 50], [140, 70]], sizes=[[20, 40], [20, 40]],
+    ...                   previous_particles=[[90, 45], [150, 75]])
+    >>> cue = LocationCue(LocationConfig(sigma=10.0))
+    >>> states = np.array([[100.0, 50.0, 0, 0, 0], [300.0, 60.0, 0, 0, 0]])
+    >>> cue.log_likelihoods(obs, states, owner=np.array([0, 1])).round(3)
+    array([[   0.   ,  -10.   ,   -0.625],
+           [-200.5  , -128.5  ,    0.   ]])
+    """
+
+    name: ClassVar[str] = "location"
+    config_type: ClassVar[type] = LocationConfig
+
+    def __init__(self, config: LocationConfig = LocationConfig()) -> None:
+        if not isinstance(config, LocationConfig):
+            raise TrackingError(f"LocationCue needs a LocationConfig, got {type(config).__name__}")
+        self.config = config
+
+    def __repr__(self) -> str:
+        return f"LocationCue({self.config!r})"
+
+    def log_likelihoods(self, obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
+        """log p_1 … log p_τ, log p_FA of every particle, shape (P, τ + 1) (W (22)–(24)).
+
+        ``owner`` is only checked: location scores do not depend on a particle's own target.
+        """
+        states, owner = _particles(obs, states, owner)
+        tau = obs.n_targets
+        scores = np.empty((states.shape[0], tau + 1))
+        if states.shape[0] == 0:
+            return scores
+        positions = states[:, :2]
+        target_sq = _squared_distances(positions, obs.centres)                      # (P, τ)
+        scores[:, :tau] = _log_gaussian(target_sq, self.config.sigma)
+        distance = self._fa_distance(positions, obs.centres, target_sq)            # (P,)
+        previous = self._fa_distance(obs.previous_particles, obs.centres)          # (Q,)
+        # A circle thinner than σ would make FA jump from 0 to its maximum within a few
+        # pixels of the targets; the floor keeps it as smooth as the target Gaussians.
+        d_max = max(float(previous.max(initial=0.0)), self.config.sigma)
+        gap = np.maximum(d_max - distance, 0.0)                                    # W (23) clamp
+        scores[:, tau] = _log_gaussian(gap ** 2, self.config.sigma)
+        return scores
+
+    def _fa_distance(self, points: np.ndarray, centres: np.ndarray, squared: np.ndarray | None = None) -> np.ndarray:
+        """d of W (24): distance to the centroid of the centres, or to the nearest centre."""
+        if self.config.fa_mode == "centroid":
+            return np.linalg.norm(points - centres.mean(axis=0), axis=1)
+        if squared is None:
+            squared = _squared_distances(points, centres)
+        return np.sqrt(squared.min(axis=1, initial=np.inf))
+
+
+def _log_gaussian(squared_distance: np.ndarray, sigma: float) -> np.ndarray:
+    """log G(d; σ) = −d² / (2σ²) from d², without the constant that cancels in W (20)–(21)."""
+    # 0 − d² rather than −d², so that d = 0 gives +0.0 (−0.0 would print as "-0.").
+    return (0.0 - squared_distance) / (2.0 * sigma ** 2)
+
+
+def _squared_distances(points: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """‖points_p − centres_j‖², shape (len(points), len(centres))."""
+    offsets = points[:, None, :] - centres[None, :, :]
+    return np.einsum("pjk,pjk->pj", offsets, offsets)
+
+
+# -- colour histograms (vectorised over particles) ------------------------------------------------
+def box_centres(boxes) -> np.ndarray:
+    """Centres ``(x + w/2, y + h/2)`` of boxes ``(x, y, w, h)``, shape (n, 2).
+
+    Examples
+    --------
+    >>> box_centres([[10, 20, 6, 8]])
+    array([[13., 24.]])
+    """
+    boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+    return boxes[:, :2] + boxes[:, 2:] / 2.0
+
+
+def colour_bins(image: np.ndarray, bins: int) -> np.ndarray:
+    """The joint-RGB bin of every pixel: r·bins² + g·bins + b, each channel cut into ``bins``.
+
+    A channel value v falls in bin ⌊v · bins / 256⌋, so the bins are equally wide.
+
+    Parameters
+    ----------
+    image : ndarray of uint8, shape (H, W, 3)
+        BGR, as OpenCV reads it.
+    bins : int
+        Bins per channel.
+
+    Returns
+    -------
+    ndarray of intp, shape (H, W)
+        Values in 0 … bins³ − 1.
+
+    Examples
+    --------
+    >>> pixel = np.array([[[0, 0, 255], [255, 255, 255]]], np.uint8)     # red, white (BGR)
+    >>> colour_bins(pixel, 8)
+    array([[448, 511]])
+    """
+    channels = image.astype(np.intp) * bins >> 8                      # ⌊v·bins/256⌋, exact in integers
+    blue, green, red = channels[..., 0], channels[..., 1], channels[..., 2]
+    return (red * bins + green) * bins + blue
+
+
+@lru_cache(maxsize=32)
+def kernel_grid(samples: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """The sample points of a box and their Epanechnikov weights (L (11), per-axis form).
+
+    A ``w_samples × h_samples`` grid of cell centres u_i = (2i + 1)/n − 1 ∈ (−1, 1) along each
+    axis, in units of the half-sizes; the weight is k(r) = 1 − r² with
+    r² = u_x² + u_y² (SPEC B.2), and points with k = 0 (the box corners outside the inscribed
+    ellipse) are dropped since they add nothing to any histogram.
+
+    Parameters
+    ----------
+    samples : (int, int)
+        Points across and down the box.
+
+    Returns
+    -------
+    offsets : ndarray, shape (S, 2)
+        (u_x, u_y) of the kept points; read-only (shared between calls).
+    weights : ndarray, shape (S,)
+        Their kernel weights, all > 0.
+
+    Examples
+    --------
+    >>> offsets, weights = kernel_grid((2, 2))
+    >>> offsets
+    array([[-0.5, -0.5],
+           [ 0.5, -0.5],
+           [-0.5,  0.5],
+           [ 0.5,  0.5]])
+    >>> weights
+    array([0.5, 0.5, 0.5, 0.5])
+    """
+    across, down = samples
+    u = (2.0 * np.arange(across) + 1.0) / across - 1.0
+    v = (2.0 * np.arange(down) + 1.0) / down - 1.0
+    grid_u, grid_v = np.meshgrid(u, v)                                 # row-major: down, then across
+    weights = 1.0 - grid_u ** 2 - grid_v ** 2
+    keep = weights > 0
+    offsets = np.stack([grid_u[keep], grid_v[keep]], axis=1)
+    weights = weights[keep]
+    offsets.flags.writeable = False
+    weights.flags.writeable = False
+    return offsets, weights
+
+
+def kernel_histograms(bin_image: np.ndarray, centres: np.ndarray, box_sizes: np.ndarray, n_bins: int,
+                      samples: tuple[int, int], foreground: np.ndarray | None = None) -> np.ndarray:
+    """Kernel-weighted histograms of P boxes at once (L (9)–(11); L (16)–(17) with a mask).
+
+    q(u) = f Σ_i k(r_i) δ[h(x_i) − u] ξ(x_i) with f = 1 / Σ_i k(r_i) (L (10)), over the
+    sample points x_i of :func:`kernel_grid` placed in each box; ξ ≡ 1 without a mask.
+
+    Sample points outside the image are moved to the nearest border pixel, so a box leaving
+    the frame keeps a full histogram of the border colours.  With a mask they count as
+    background instead (ξ = 0): nothing outside the frame is foreground, and keeping them in
+    f is what lowers the score of a box that leaves the frame.  The mask never enters f:
+    Σ_u q(u) = F, the kernel-weighted foreground fraction of the box, ≤ 1 (SPEC B.4).
+
+    Parameters
+    ----------
+    bin_image : ndarray of int, shape (H, W)
+        The bin of every pixel (:func:`colour_bins`).
+    centres : ndarray, shape (P, 2)
+        Box centres (cx, cy).
+    box_sizes : ndarray, shape (P, 2)
+        Box sizes (w, h), positive.
+    n_bins : int
+        B, the number of bins (values of ``bin_image`` lie in 0 … B − 1).
+    samples : (int, int)
+        The grid of :func:`kernel_grid`.
+    foreground : ndarray of bool, shape (H, W), optional
+        ξ of L (16).
+
+    Returns
+    -------
+    ndarray, shape (P, B)
+        One histogram per box; rows sum to 1 without a mask and to F with one.
+
+    Examples
+    --------
+    The left half of a 4×4 image is in bin 0, the right half in bin 1; a box over the whole
+    image splits evenly, and with the right half as foreground only that half is counted:
+
+    >>> bins = np.repeat([[0, 0, 1, 1]], 4, axis=0)
+    >>> kernel_histograms(bins, np.array([[2.0, 2.0]]), np.array([[4.0, 4.0]]), 2, (4, 4))
+    array([[0.5, 0.5]])
+    >>> kernel_histograms(bins, np.array([[2.0, 2.0]]), np.array([[4.0, 4.0]]), 2, (4, 4), foreground=bins == 1)
+    array([[0. , 0.5]])
+    """
+    offsets, weights = kernel_grid(tuple(samples))
+    n_boxes = centres.shape[0]
+    height, width = bin_image.shape
+    half = 0.5 * box_sizes
+    xs = centres[:, 0:1] + offsets[None, :, 0] * half[:, 0:1]                      # (P, S)
+    ys = centres[:, 1:2] + offsets[None, :, 1] * half[:, 1:2]
+    # Truncating a coordinate clipped to [0, W − 1] gives the same pixel as clipping ⌊x⌋,
+    # without a floor pass over all P·S samples.
+    pixels = np.clip(ys, 0, height - 1).astype(np.intp) * width + np.clip(xs, 0, width - 1).astype(np.intp)
+    slots = bin_image.ravel()[pixels] + (np.arange(n_boxes, dtype=np.intp) * n_bins)[:, None]
+    sample_weights = np.broadcast_to(weights, pixels.shape)
+    if foreground is not None:
+        inside = (xs >= 0) & (xs < width) & (ys >= 0) & (ys < height)
+        sample_weights = sample_weights * (foreground.ravel()[pixels] & inside)
+    counts = np.bincount(slots.ravel(), weights=sample_weights.ravel(), minlength=n_boxes * n_bins)
+    return counts.reshape(n_boxes, n_bins) / weights.sum()                         # f of L (10)
+
+
+def bhattacharyya(histograms: np.ndarray, references: np.ndarray) -> np.ndarray:
+    """Bhattacharyya coefficients ρ[h_p, q_k] = Σ_u √(h_p(u) q_k(u)) of all pairs (L (12)–(13)).
+
+    One matrix product of square roots; rounding is clipped into [0, 1] so that
+    1 − ρ = d² (W (17)) is never negative.
+
+    Parameters
+    ----------
+    histograms : ndarray, shape (P, B)
+    references : ndarray, shape (K, B)
+
+    Returns
+    -------
+    ndarray, shape (P, K)
+
+    Examples
+    --------
+    >>> bhattacharyya(np.array([[0.5, 0.5], [1.0, 0.0]]), np.array([[0.5, 0.5], [0.0, 1.0]]))
+    array([[1.        , 0.70710678],
+           [0.70710678, 0.        ]])
+    """
+    return np.clip(np.sqrt(histograms) @ np.sqrt(references).T, 0.0, 1.0)
+
+
+def false_alarm_histogram(scene_counts: np.ndarray, templates: np.ndarray, target_areas: np.ndarray | None = None,
+                          mode: str = "subtract") -> np.ndarray:
+    """The colours of the scene that are not the targets', q_FA (W (18)).
+
+    ``"subtract"``: q_FA ∝ max(q_scene − Σ_j q_j, 0) with q_scene the normalised scene
+    histogram — the literal W (18), which removes a target colour from FA entirely.
+    ``"counts"``: q_FA ∝ max(n_scene − Σ_j A_j q_j, 0), subtracting the pixels the targets
+    cover (A_j of them) from the scene's pixel counts.  Either way the result is renormalised
+    to sum 1, and is uniform if nothing is left (SPEC B.3).
+
+    Parameters
+    ----------
+    scene_counts : ndarray, shape (B,)
+        Pixel counts of every bin over the whole frame (no kernel).
+    templates : ndarray, shape (τ, B)
+        The target templates q_j, rows summing to 1.
+    target_areas : ndarray, shape (τ,), optional
+        A_j in pixels (needed by ``"counts"``).
+    mode : {"subtract", "counts"}
+
+    Returns
+    -------
+    ndarray, shape (B,)
+        Sums to 1.
+
+    Examples
+    --------
+    A scene of 90 background pixels (bin 0) and 10 target pixels (bin 1):
+
+    >>> scene, target = np.array([90.0, 10.0, 0.0]), np.array([[0.0, 1.0, 0.0]])
+    >>> false_alarm_histogram(scene, target)
+    array([1., 0., 0.])
+
+    With ``"counts"``, a box of 20 pixels, half of them background, removes 10 pixels of each:
+
+    >>> false_alarm_histogram(scene, np.array([[0.5, 0.5, 0.0]]), np.array([20.0]), mode="counts")
+    array([1., 0., 0.])
+    """
+    _choice("false_alarm_histogram", "mode", mode, FA_HISTOGRAMS)
+    scene_counts = np.asarray(scene_counts, dtype=np.float64)
+    if mode == "subtract":
+        scene, targets = scene_counts / scene_counts.sum(), templates.sum(axis=0)
+    else:
+        if target_areas is None:
+            raise TrackingError('fa_hist="counts" needs the target areas')
+        scene, targets = scene_counts, np.asarray(target_areas, dtype=np.float64) @ templates
+    residual = scene - targets
+    # What survives the subtraction by rounding alone (~1e-17 of the scene) is not a colour of
+    # the scene; renormalised, it would become a spurious FA histogram.  This also clamps at 0.
+    residual[residual <= RESIDUAL_TOLERANCE * scene.sum()] = 0.0
+    total = residual.sum()
+    if total <= 0:
+        return np.full(scene_counts.shape, 1.0 / scene_counts.size)
+    return residual / total
+
+
+# -- colour cues ----------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ColourConfig:
+    """Settings of the colour cues.
+
+    Attributes
+    ----------
+    bins : int
+        Bins per channel of the joint RGB histogram (bins³ in all; W: 8, C: 16), at most 16.
+    sigma : float
+        σ_col of W (16) and W (19) (SPEC default 0.15; dimensionless, like d).
+    samples : (int, int)
+        Sample points across and down a box (:func:`kernel_grid`); the default suits upright
+        people, twice as tall as wide.
+    fa_hist : {"subtract", "counts"}
+        How q_FA removes the target colours from the scene (:func:`false_alarm_histogram`).
+    """
+
+    bins: int = 8
+    sigma: float = 0.15
+    samples: tuple[int, int] = (12, 24)
+    fa_hist: str = "subtract"
+
+    def __post_init__(self) -> None:
+        bins = _count("ColourConfig", "bins", self.bins)
+        if bins > MAX_BINS_PER_CHANNEL:
+            raise TrackingError(f"ColourConfig.bins must be at most {MAX_BINS_PER_CHANNEL} per channel "
+                                f"({MAX_BINS_PER_CHANNEL}³ joint bins), got {bins}")
+        object.__setattr__(self, "bins", bins)
+        object.__setattr__(self, "sigma", _positive("ColourConfig", "sigma", self.sigma))
+        if isinstance(self.samples, (str, bytes)) or not hasattr(self.samples, "__len__") or len(self.samples) != 2:
+            raise TrackingError(f"ColourConfig.samples must be a pair (across, down), got {self.samples!r}")
+        object.__setattr__(self, "samples", tuple(_count("ColourConfig", "samples", n) for n in self.samples))
+        _choice("ColourConfig", "fa_hist", self.fa_hist, FA_HISTOGRAMS)
+
+    @property
+    def n_bins(self) -> int:
+        """B = bins³."""
+        return self.bins ** 3
+
+
+class ColourCue:
+    """Colour similarity of every particle to every target and to the rest of the scene (W (16)–(19)).
+
+    For the kernel-weighted histogram h of a particle's box (L (9)–(11)) and a reference q,
+    d = √(1 − ρ[h, q]) (W (17), with the square root inside the sum) and
+    log p = −d² / (2σ²) = −(1 − ρ) / (2σ²) (W (16), exponent corrected).  The references are
+    the templates q_1 … q_τ and q_FA (W (18)), recomputed every frame from the whole frame.
+
+    Templates are set from boxes ``(x, y, w, h)`` with :meth:`set_templates` or one at a time
+    with :meth:`add_target` / :meth:`remove_target`; they stay fixed (W describes no update).
+    A template is the histogram of its box sampled exactly as a particle's box, so a particle
+    that sits on the box scores ρ = 1.
+
+    Examples
+    --------
+    A red target on a grey background; a particle on the target and one beside it:
+
+    >>> image = np.full((60, 80, 3), 128, np.uint8)
+    >>> image[20:40, 30:40] = (0, 0, 255)
+    >>> cue = ColourCue(ColourConfig(samples=(6, 12)))
+    >>> cue.set_templates(image, np.array([[30, 20, 10, 20]]))
+    >>> obs = Observation(image, None, [[35.0, 30.0]], [[10.0, 20.0]], np.zeros((0, 2)))
+    >>> states = np.array([[35.0, 30.0, 0, 0, 0], [60.0, 30.0, 0, 0, 0]])
+    >>> logs = cue.log_likelihoods(obs, states, np.array([0, 0]))      # columns θ1, FA
+    >>> np.exp(logs).round(6)                                             # ρ = 1 gives p = 1
+    array([[1., 0.],
+           [0., 1.]])
+    >>> round(float(logs[0, 1]), 2)                                       # ρ = 0: −1 / (2 · 0.15²)
+    -22.22
+    """
+
+    name: ClassVar[str] = "colour"
+    config_type: ClassVar[type] = ColourConfig
+
+    def __init__(self, config: ColourConfig = ColourConfig()) -> None:
+        if not isinstance(config, ColourConfig):
+            raise TrackingError(f"{type(self).__name__} needs a ColourConfig, got {type(config).__name__}")
+        self.config = config
+        self._templates = np.zeros((0, config.n_bins))
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.config!r}, targets={self.n_targets})"
+
+    # -- templates --------------------------------------------------------------------------
+    @property
+    def n_targets(self) -> int:
+        """τ, the number of templates held."""
+        return self._templates.shape[0]
+
+    @property
+    def templates(self) -> np.ndarray:
+        """The target templates q_j, shape (τ, B), rows summing to 1 (a read-only view)."""
+        view = self._templates.view()
+        view.flags.writeable = False
+        return view
+
+    def set_templates(self, image: np.ndarray, boxes, foreground: np.ndarray | None = None) -> None:
+        """Replace all templates by the histograms of ``boxes`` in ``image``.
+
+        Parameters
+        ----------
+        image : ndarray of uint8, shape (H, W, 3)
+            The frame the targets are taken from (BGR).
+        boxes : array_like, shape (τ, 4)
+            ``x, y, w, h`` in 0-based pixel coordinates; each must overlap the image.
+        foreground : ndarray of bool, shape (H, W), optional
+            The foreground mask of that frame (used by :class:`ForegroundColourCue` only).
+        """
+        self._templates = self._build_templates(image, boxes, foreground)
+
+    def add_target(self, image: np.ndarray, box, foreground: np.ndarray | None = None) -> int:
+        """Append the template of one new target, box ``(x, y, w, h)``; returns its index τ − 1."""
+        template = self._build_templates(image, np.reshape(np.asarray(box, dtype=np.float64), (1, -1)), foreground)
+        self._templates = np.concatenate([self._templates, template])
+        return self.n_targets - 1
+
+    def remove_target(self, index: int) -> None:
+        """Forget target ``index``; the templates after it move down by one, as the tracker's targets must."""
+        if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < self.n_targets:
+            raise TrackingError(f"no target {index!r} to remove; the cue holds targets 0..{self.n_targets - 1}")
+        self._templates = np.delete(self._templates, index, axis=0)
+
+    def _build_templates(self, image, boxes, foreground) -> np.ndarray:
+        image = _checked_image(image)
+        if foreground is not None:
+            foreground = _checked_mask(foreground, image.shape[:2])
+        boxes = _boxes(boxes, image.shape[:2])
+        bin_image = colour_bins(image, self.config.bins)
+        return self._template_histograms(bin_image, boxes, foreground)
+
+    def _template_histograms(self, bin_image: np.ndarray, boxes: np.ndarray, foreground) -> np.ndarray:
+        return kernel_histograms(bin_image, box_centres(boxes), boxes[:, 2:], self.config.n_bins, self.config.samples)
+
+    # -- scoring ----------------------------------------------------------------------------
+    def histograms(self, obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
+        """The candidate histograms h of all particles' boxes, shape (P, B) (L (9)–(11))."""
+        states, owner = _particles(obs, states, owner)
+        return self._candidate_histograms(obs, colour_bins(obs.image, self.config.bins), states, owner)
+
+    def _candidate_histograms(self, obs: Observation, bin_image: np.ndarray, states: np.ndarray,
+                              owner: np.ndarray) -> np.ndarray:
+        sizes = _particle_sizes(obs, states, owner)
+        return kernel_histograms(bin_image, states[:, :2], sizes, self.config.n_bins, self.config.samples)
+
+    def false_alarm_histogram(self, obs: Observation) -> np.ndarray:
+        """q_FA of this frame, shape (B,) (W (18)); A_j = w_j · h_j from ``obs.sizes``."""
+        self._check_targets(obs)
+        return self._false_alarm(obs, colour_bins(obs.image, self.config.bins))
+
+    def _false_alarm(self, obs: Observation, bin_image: np.ndarray) -> np.ndarray:
+        scene = np.bincount(bin_image.ravel(), minlength=self.config.n_bins)     # kernel-free, whole frame
+        areas = obs.sizes.prod(axis=1)
+        return false_alarm_histogram(scene, self._templates, areas, self.config.fa_hist)
+
+    def log_likelihoods(self, obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
+        """log p_1 … log p_τ, log p_FA = −(1 − ρ) / (2σ²) of every particle, shape (P, τ + 1) (W (16)–(19))."""
+        states, owner = _particles(obs, states, owner)
+        self._check_targets(obs)
+        bin_image = colour_bins(obs.image, self.config.bins)
+        references = np.concatenate([self._templates, self._false_alarm(obs, bin_image)[None, :]])   # (τ + 1, B)
+        rho = bhattacharyya(self._candidate_histograms(obs, bin_image, states, owner), references)
+        return _log_gaussian(1.0 - rho, self.config.sigma)                          # d² = 1 − ρ (W (17))
+
+    def _check_targets(self, obs: Observation) -> None:
+        if obs.n_targets != self.n_targets:
+            raise TrackingError(f"the {self.name} cue holds {self.n_targets} target templates but the observation "
+                                f"has {obs.n_targets} targets; add or remove templates with the targets")
+
+
+class ForegroundColourCue(ColourCue):
+    """Colour of the *foreground* pixels of every particle's box (L (16)–(17)).
+
+    As :class:`ColourCue`, but a candidate histogram counts only the pixels that the
+    background model marks as foreground, while still normalising over all sample points of
+    the box (the f of L (10)), so Σ_u h(u) = F, the kernel-weighted foreground fraction.  As
+    ρ ≤ √F (Cauchy–Schwarz), a particle that covers little foreground is crushed, whatever
+    the colour of its few foreground pixels (SPEC B.4).  Renormalising over the foreground
+    pixels would reward exactly those particles, so it is not done.
+
+    A target template is the masked histogram of its box at initiation, normalised to 1; if
+    the mask is empty there, the unmasked histogram is used.  q_FA is that of
+    :class:`ColourCue`.  ``Observation.foreground`` and the ``foreground`` argument of the
+    template methods are required.
+
+    Examples
+    --------
+    A red target (foreground) on grey; one particle on it, one on the background:
+
+    >>> image = np.full((60, 80, 3), 128, np.uint8)
+    >>> image[20:40, 30:40] = (0, 0, 255)
+    >>> mask = np.zeros((60, 80), bool)
+    >>> mask[20:40, 30:40] = True
+    >>> cue = ForegroundColourCue(ColourConfig(samples=(6, 12)))
+    >>> cue.set_templates(image, np.array([[30, 20, 10, 20]]), foreground=mask)
+    >>> obs = Observation(image, mask, [[35.0, 30.0]], [[10.0, 20.0]], np.zeros((0, 2)))
+    >>> states = np.array([[35.0, 30.0, 0, 0, 0], [60.0, 30.0, 0, 0, 0]])
+    >>> cue.histograms(obs, states, np.array([0, 0])).sum(axis=1)       # F
+    array([1., 0.])
+    """
+
+    name: ClassVar[str] = "foreground"
+
+    def _template_histograms(self, bin_image: np.ndarray, boxes: np.ndarray, foreground) -> np.ndarray:
+        if foreground is None:
+            raise TrackingError("the foreground cue builds its templates from the foreground mask; pass foreground=")
+        plain = super()._template_histograms(bin_image, boxes, None)
+        masked = kernel_histograms(bin_image, box_centres(boxes), boxes[:, 2:], self.config.n_bins,
+                                   self.config.samples, foreground)
+        mass = masked.sum(axis=1, keepdims=True)
+        # The template describes the target, not how much of its box it fills: normalise to 1.
+        return np.where(mass > 0, masked / np.where(mass > 0, mass, 1.0), plain)
+
+    def _candidate_histograms(self, obs: Observation, bin_image: np.ndarray, states: np.ndarray,
+                              owner: np.ndarray) -> np.ndarray:
+        if obs.foreground is None:
+            raise TrackingError("the foreground cue needs Observation.foreground, the background model's mask; got None")
+        sizes = _particle_sizes(obs, states, owner)
+        return kernel_histograms(bin_image, states[:, :2], sizes, self.config.n_bins, self.config.samples,
+                                 obs.foreground)
+
+
+def _particle_sizes(obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
+    """Box sizes (w, h) of the particles, ``sizes[owner] * exp(log_scale)``, shape (P, 2)."""
+    # A scale beyond e^±30 ≈ 10^±13 already covers or misses any image; clipping keeps exp
+    # finite, so no sample coordinate becomes inf − inf = NaN.
+    log_scale = np.clip(states[:, 4:5], -MAX_ABS_LOG_SCALE, MAX_ABS_LOG_SCALE)
+    return obs.sizes[owner] * np.exp(log_scale)
+
+
+def _boxes(boxes, shape: tuple[int, int]) -> np.ndarray:
+    """Checked boxes (n, 4) ``x, y, w, h`` that overlap an image of ``shape`` (H, W)."""
+    boxes = np.asarray(boxes, dtype=np.float64)
+    if boxes.ndim != 2 or boxes.shape[1] != 4:
+        raise TrackingError(f"boxes must have shape (n, 4) (x, y, w, h), got {boxes.shape}")
+    if not np.isfinite(boxes).all() or (boxes[:, 2:] <= 0).any():
+        raise TrackingError("boxes must be finite with positive width and height")
+    height, width = shape
+    outside = (boxes[:, 0] >= width) | (boxes[:, 1] >= height) | (boxes[:, 0] + boxes[:, 2] <= 0) | \
+              (boxes[:, 1] + boxes[:, 3] <= 0)
+    if outside.any():
+        raise TrackingError(f"box {boxes[np.argmax(outside)].tolist()} lies outside the {width}×{height} image")
+    return boxes
+
+
+# -- registry -------------------------------------------------------------------------------------
+#: The cues by name; each class takes its ``config_type`` settings.
+CUES: dict[str, type] = {"colour": ColourCue, "location": LocationCue, "foreground": ForegroundColourCue}
+
+
+def make_cue(name: str, **options) -> Cue:
+    """Build a cue of :data:`CUES` by name, its settings given as keywords.
+
+    Examples
+    --------
+    >>> make_cue("location", sigma=5.0)
+    LocationCue(LocationConfig(sigma=5.0, fa_mode='centroid'))
+    >>> make_cue("edges")
+    Traceback (most recent call last):
+    ...
+    plugins.video_tracking.errors.UnknownCueError: unknown cue 'edges'; known cues: colour, location, foreground
+    """
+    cue_type = CUES.get(name) if isinstance(name, str) else None
+    if cue_type is None:
+        raise UnknownCueError(f"unknown cue {name!r}; known cues: {', '.join(CUES)}")
+    known = [f.name for f in fields(cue_type.config_type)]
+    unknown = sorted(set(options) - set(known))
+    if unknown:
+        raise TrackingError(f"cue {name!r} has no option {', '.join(unknown)}; its options are {', '.join(known)}")
+    return cue_type(cue_type.config_type(**options))

@@ -1,0 +1,498 @@
+"""Image cues of the tracker: location, colour and foreground colour (SPEC B.2–B.4), and the background model."""
+
+import doctest
+import math
+
+import numpy as np
+import pytest
+
+from plugins.video_tracking import background, cues
+from plugins.video_tracking.background import BackgroundConfig, BackgroundModel
+from plugins.video_tracking.cues import (
+    CUES,
+    AppearanceCue,
+    ColourConfig,
+    ColourCue,
+    Cue,
+    ForegroundColourCue,
+    LocationConfig,
+    LocationCue,
+    Observation,
+    bhattacharyya,
+    colour_bins,
+    make_cue,
+)
+from plugins.video_tracking.errors import TrackingError, UnknownCueError
+from plugins.video_tracking.fusion import CueFusion
+
+GREY = (128, 128, 128)
+RED = (0, 0, 255)          # BGR
+BLUE = (255, 0, 0)
+GREEN = (0, 200, 0)
+
+
+def scene_with_targets(height=100, width=140):
+    """A grey frame with a red target at (30, 20, 20, 40) and a blue one at (90, 40, 20, 40) (x, y, w, h)."""
+    image = np.full((height, width, 3), GREY, np.uint8)
+    image[20:60, 30:50] = RED
+    image[40:80, 90:110] = BLUE
+    boxes = np.array([[30.0, 20.0, 20.0, 40.0], [90.0, 40.0, 20.0, 40.0]])
+    return image, boxes
+
+
+def observation(image, boxes, foreground=None, previous=None):
+    centres = boxes[:, :2] + boxes[:, 2:] / 2
+    return Observation(image, foreground, centres, boxes[:, 2:], np.zeros((0, 2)) if previous is None else previous)
+
+
+def states_at(*points, log_scale=0.0):
+    """Particle states (P, 5) at the given centres, zero velocity."""
+    points = np.asarray(points, dtype=float)
+    return np.column_stack([points, np.zeros((len(points), 2)), np.full(len(points), log_scale)])
+
+
+def slow_histogram(image, centre, size, bins, samples, mask=None):
+    """One particle's histogram, pixel by pixel, written straight from L (9)-(11) and L (16)-(17)."""
+    height, width = image.shape[:2]
+    across, down = samples
+    histogram = np.zeros(bins ** 3)
+    total = 0.0
+    for row in range(down):
+        for col in range(across):
+            u = (2 * col + 1) / across - 1
+            v = (2 * row + 1) / down - 1
+            k = 1 - u * u - v * v                          # Epanechnikov, per-axis r²
+            if k <= 0:
+                continue
+            total += k                                     # f of L (10): every sample point
+            px = math.floor(centre[0] + u * (size[0] / 2))
+            py = math.floor(centre[1] + v * (size[1] / 2))
+            inside = 0 <= px < width and 0 <= py < height
+            px, py = min(max(px, 0), width - 1), min(max(py, 0), height - 1)
+            if mask is not None and not (inside and mask[py, px]):
+                continue
+            blue, green, red = (int(c) * bins // 256 for c in image[py, px])
+            histogram[(red * bins + green) * bins + blue] += k
+    return histogram / total
+
+
+# -- location cue ----------------------------------------------------------------------------------
+def location_obs(previous):
+    return Observation(np.zeros((120, 200, 3), np.uint8), None, np.array([[100.0, 50.0], [140.0, 70.0]]),
+                       np.array([[20.0, 40.0], [20.0, 40.0]]), np.asarray(previous, dtype=float))
+
+
+def test_location_matches_the_formulas_by_hand():
+    obs = location_obs([[90, 45], [150, 75], [120, 60]])
+    states = states_at([110, 60], [100, 50], [300, 10])
+    scores = LocationCue(LocationConfig(sigma=10.0)).log_likelihoods(obs, states, np.array([0, 0, 1]))
+    d_max = math.hypot(30, 15)                                 # the particle (90, 45) is farthest from (120, 60)
+    expected = [
+        [-(10 ** 2 + 10 ** 2) / 200, -(30 ** 2 + 10 ** 2) / 200, -(d_max - 10) ** 2 / 200],
+        [0.0, -(40 ** 2 + 20 ** 2) / 200, -(d_max - math.hypot(20, 10)) ** 2 / 200],
+        [-(200 ** 2 + 40 ** 2) / 200, -(160 ** 2 + 60 ** 2) / 200, 0.0],       # beyond d_max: clamped
+    ]
+    np.testing.assert_allclose(scores, expected, rtol=1e-12)
+
+
+def test_location_nearest_mode_measures_from_the_nearest_target():
+    obs = location_obs([[90, 45], [150, 75], [120, 60]])
+    scores = LocationCue(LocationConfig(sigma=10.0, fa_mode="nearest")).log_likelihoods(
+        obs, states_at([110, 60]), np.array([1]))
+    d_max = math.hypot(20, 10)                                 # (120, 60) lies √500 from both targets
+    assert scores[0, 2] == pytest.approx(-(d_max - math.hypot(10, 10)) ** 2 / 200, rel=1e-12)
+    assert scores[0, 0] == pytest.approx(-1.0) and scores[0, 1] == pytest.approx(-5.0)
+
+
+def test_location_fa_grows_away_from_the_centroid_and_is_clamped_outside_d_max():
+    obs = location_obs([[90, 45], [150, 75]])
+    d_max = math.hypot(30, 15)
+    radii = np.linspace(0, d_max + 60, 200)
+    direction = np.array([0.6, -0.8])
+    states = states_at(*(np.array([120.0, 60.0]) + radii[:, None] * direction))
+    fa = LocationCue().log_likelihoods(obs, states, np.zeros(len(radii), dtype=int))[:, 2]
+    inside = radii < d_max
+    assert np.all(np.diff(fa[inside]) > 0)                    # strictly more FA-like going out
+    assert np.all(fa[~inside] == 0.0)                          # max(d_max − d, 0) = 0: no fall-back
+    assert fa[0] == pytest.approx(-d_max ** 2 / 200)
+
+
+def test_location_d_max_is_floored_at_sigma():
+    obs = location_obs([[120, 60]])                            # every old particle at the centroid: d_max = 0
+    fa = LocationCue(LocationConfig(sigma=10.0)).log_likelihoods(obs, states_at([120, 60], [124, 63]), np.array([0, 0]))
+    np.testing.assert_allclose(fa[:, 2], [-100 / 200, -25 / 200])
+
+
+# -- colour cue ------------------------------------------------------------------------------------
+def test_particle_on_a_target_box_matches_its_template():
+    image, boxes = scene_with_targets()
+    cue = ColourCue()
+    cue.set_templates(image, boxes)
+    obs = observation(image, boxes)
+    states = states_at(*obs.centres)
+    histograms = cue.histograms(obs, states, np.array([0, 1]))
+    np.testing.assert_allclose(histograms, cue.templates, atol=1e-15)
+    scores = cue.log_likelihoods(obs, states, np.array([0, 1]))
+    np.testing.assert_allclose(np.diag(scores[:, :2]), [0.0, 0.0], atol=1e-12)          # ρ = 1 → log p = 0
+    np.testing.assert_allclose(scores[0, 1], -1 / (2 * 0.15 ** 2))                        # red vs blue: ρ = 0
+
+
+def test_templates_of_a_textured_target_are_matched_exactly():
+    rng = np.random.default_rng(3)
+    image = rng.integers(0, 256, size=(80, 90, 3), dtype=np.uint8)
+    boxes = np.array([[10.5, 7.25, 23.0, 41.0]])
+    cue = ColourCue(ColourConfig(bins=4, samples=(9, 17)))
+    cue.set_templates(image, boxes)
+    scores = cue.log_likelihoods(observation(image, boxes), states_at([22.0, 27.75]), np.array([0]))
+    assert scores[0, 0] == pytest.approx(0.0, abs=1e-12)
+    assert scores[0, 1] < -1.0
+
+
+def test_a_box_on_another_colour_has_lower_similarity():
+    image, boxes = scene_with_targets()
+    cue = ColourCue()
+    cue.set_templates(image, boxes[:1])
+    obs = observation(image, boxes[:1])
+    # on the red target; half over it; on grey background
+    states = states_at([40, 40], [50, 40], [80, 15])
+    histograms = cue.histograms(obs, states, np.zeros(3, dtype=int))
+    rho = bhattacharyya(histograms, cue.templates)[:, 0]
+    assert rho[0] == pytest.approx(1.0) and 0.3 < rho[1] < 0.9 and rho[2] == 0.0
+    scores = cue.log_likelihoods(obs, states, np.zeros(3, dtype=int))
+    np.testing.assert_allclose(scores[:, 0], -(1 - rho) / (2 * 0.15 ** 2), atol=1e-12)   # W (16)-(17)
+    assert scores[0, 0] > scores[1, 0] > scores[2, 0]
+
+
+@pytest.mark.parametrize("masked", [False, True])
+def test_vectorised_histograms_equal_a_particle_by_particle_loop(masked):
+    rng = np.random.default_rng(7)
+    height, width = 50, 70
+    image = rng.integers(0, 256, size=(height, width, 3), dtype=np.uint8)
+    mask = rng.random((height, width)) < 0.4
+    config = ColourConfig(bins=4, samples=(7, 10))
+    sizes = np.array([[12.0, 20.0], [9.0, 15.0]])
+    centres = np.array([[30.0, 20.0], [50.0, 30.0]])
+    n = 40
+    # partly and fully outside the image too, and with scale changes
+    states = np.column_stack([rng.uniform(-20, width + 20, n), rng.uniform(-20, height + 20, n),
+                              rng.normal(size=(n, 2)), rng.normal(0, 0.5, n)])
+    owner = rng.integers(0, 2, n)
+    obs = Observation(image, mask if masked else None, centres, sizes, np.zeros((0, 2)))
+    cue = ForegroundColourCue(config) if masked else ColourCue(config)
+    fast = cue.histograms(obs, states, owner)
+    slow = np.array([slow_histogram(image, states[p, :2], sizes[owner[p]] * np.exp(states[p, 4]), 4, (7, 10),
+                                    mask if masked else None) for p in range(n)])
+    np.testing.assert_allclose(fast, slow, rtol=1e-12, atol=1e-15)
+
+
+def test_colour_bins_cut_each_channel_evenly():
+    levels = np.arange(256, dtype=np.uint8)
+    image = np.stack([levels, np.zeros(256, np.uint8), np.zeros(256, np.uint8)], axis=-1)[None]     # blue ramp
+    np.testing.assert_array_equal(colour_bins(image, 8)[0], np.repeat(np.arange(8), 32))
+    image = image[..., ::-1]                                                                          # red ramp
+    np.testing.assert_array_equal(colour_bins(np.ascontiguousarray(image), 8)[0], np.repeat(np.arange(8), 32) * 64)
+
+
+@pytest.mark.parametrize("mode", ["subtract", "counts"])
+def test_false_alarm_histogram_excludes_the_target_colours(mode):
+    image, boxes = scene_with_targets()
+    cue = ColourCue(ColourConfig(fa_hist=mode))
+    cue.set_templates(image, boxes)
+    q_fa = cue.false_alarm_histogram(observation(image, boxes))
+    red, blue, grey = (colour_bins(np.array([[c]], np.uint8), 8)[0, 0] for c in (RED, BLUE, GREY))
+    assert q_fa.sum() == pytest.approx(1.0)
+    assert q_fa[red] == 0.0 and q_fa[blue] == 0.0
+    assert q_fa[grey] == pytest.approx(1.0)
+    # a particle on the background is FA-like, one on a target is not
+    scores = cue.log_likelihoods(observation(image, boxes), states_at([10, 85], [40, 40]), np.array([0, 0]))
+    assert scores[0, 2] == pytest.approx(0.0, abs=1e-12) and scores[0, 2] > scores[0, :2].max()
+    assert scores[1, 2] == pytest.approx(-1 / (2 * 0.15 ** 2))
+
+
+def test_false_alarm_histogram_keeps_the_target_colour_left_in_the_background():
+    # A red patch elsewhere in the scene: "counts" keeps it in FA, "subtract" removes red entirely.
+    image, boxes = scene_with_targets()
+    image[85:95, 5:25] = RED
+    red = colour_bins(np.array([[RED]], np.uint8), 8)[0, 0]
+    obs = observation(image, boxes)
+    for mode, expected_red in (("subtract", 0.0), ("counts", 200 / (image.shape[0] * image.shape[1] - 1600))):
+        cue = ColourCue(ColourConfig(fa_hist=mode))
+        cue.set_templates(image, boxes)
+        assert cue.false_alarm_histogram(obs)[red] == pytest.approx(expected_red)
+
+
+def test_false_alarm_histogram_is_uniform_when_the_targets_fill_the_scene():
+    image = np.full((20, 20, 3), RED, np.uint8)
+    boxes = np.array([[0.0, 0.0, 20.0, 20.0]])
+    cue = ColourCue(ColourConfig(bins=2))
+    cue.set_templates(image, boxes)
+    np.testing.assert_allclose(cue.false_alarm_histogram(observation(image, boxes)), np.full(8, 1 / 8))
+
+
+def test_false_alarm_histogram_ignores_rounding_residue():
+    # A target template equal to the scene up to rounding leaves nothing: uniform, not amplified noise.
+    rng = np.random.default_rng(10)                  # a template whose subtraction leaves ~1e-16 > 0 in every bin
+    template = rng.random(6)
+    template /= template.sum()
+    scene = template * 997.0 * (1 + 1e-15)
+    assert (scene / scene.sum() - template > 0).any()
+    for mode in ("subtract", "counts"):
+        q_fa = cues.false_alarm_histogram(scene, template[None, :], np.array([997.0]), mode)
+        np.testing.assert_allclose(q_fa, np.full(6, 1 / 6))
+
+
+def test_targets_are_added_and_removed_in_order():
+    image, boxes = scene_with_targets()
+    cue = ColourCue()
+    assert cue.add_target(image, boxes[1]) == 0
+    assert cue.add_target(image, boxes[0]) == 1
+    both = cue.templates.copy()
+    cue.remove_target(0)
+    np.testing.assert_array_equal(cue.templates, both[1:])
+    with pytest.raises(TrackingError, match="no target 3"):
+        cue.remove_target(3)
+    with pytest.raises(ValueError):
+        cue.templates[0, 0] = 1.0                                         # the templates are read-only
+    cue.set_templates(image, boxes)
+    np.testing.assert_array_equal(cue.templates, both[::-1])
+
+
+# -- foreground-masked colour (L (16)-(17)) --------------------------------------------------------
+def foreground_scene():
+    image = np.full((100, 100, 3), GREY, np.uint8)
+    image[30:70, 40:60] = RED
+    mask = np.zeros((100, 100), bool)
+    mask[30:70, 40:60] = True
+    boxes = np.array([[40.0, 30.0, 20.0, 40.0]])
+    return image, mask, boxes
+
+
+def test_foreground_histogram_sums_to_the_kernel_weighted_foreground_fraction():
+    image, mask, boxes = foreground_scene()
+    cue = ForegroundColourCue(ColourConfig(samples=(10, 20)))
+    cue.set_templates(image, boxes, foreground=mask)
+    obs = observation(image, boxes, foreground=mask)
+    states = states_at([50, 50], [58, 60], [66, 82], [10, 10])
+    histograms = cue.histograms(obs, states, np.zeros(4, dtype=int))
+    # F by hand: the kernel weights of the sample points that land on the mask, over all weights
+    offsets, weights = cues.kernel_grid((10, 20))
+    for p, (cx, cy) in enumerate(states[:, :2]):
+        px = np.floor(cx + offsets[:, 0] * 10).astype(int)
+        py = np.floor(cy + offsets[:, 1] * 20).astype(int)
+        on = (px >= 40) & (px < 60) & (py >= 30) & (py < 70)
+        assert histograms[p].sum() == pytest.approx(weights[on].sum() / weights.sum(), abs=1e-12)
+    assert histograms[0].sum() == pytest.approx(1.0) and histograms[3].sum() == 0.0
+    assert 0 < histograms[2].sum() < 0.1
+
+
+def test_foreground_normalisation_crushes_particles_that_cover_little_foreground():
+    image, mask, boxes = foreground_scene()
+    cue = ForegroundColourCue()
+    cue.set_templates(image, boxes, foreground=mask)
+    obs = observation(image, boxes, foreground=mask)
+    states = states_at([50, 50], [66, 82])                # on the target; over one corner of it
+    histograms = cue.histograms(obs, states, np.zeros(2, dtype=int))
+    coverage = histograms.sum(axis=1)
+    rho = bhattacharyya(histograms, cue.templates)[:, 0]
+    # all the foreground it sees is the target's red, yet ρ = √F (Cauchy–Schwarz bound reached) …
+    np.testing.assert_allclose(rho, np.sqrt(coverage))
+    # … whereas renormalising over the foreground pixels alone would call it a perfect match
+    assert bhattacharyya(histograms[1:] / coverage[1], cue.templates)[0, 0] == pytest.approx(1.0)
+    scores = cue.log_likelihoods(obs, states, np.zeros(2, dtype=int))
+    assert scores[0, 0] == pytest.approx(0.0, abs=1e-12)
+    assert scores[0, 0] - scores[1, 0] > 10.0             # likelihood ratio above e^10
+
+
+def test_foreground_template_is_normalised_and_falls_back_without_foreground():
+    image, mask, boxes = foreground_scene()
+    half = mask.copy()
+    half[:, 50:] = False                                   # only the left half of the target is foreground
+    wide = np.array([[30.0, 20.0, 40.0, 60.0]])                # the target with grey around it
+    cue = ForegroundColourCue()
+    cue.set_templates(image, wide, foreground=half)
+    plain = ColourCue()
+    plain.set_templates(image, wide)
+    red = colour_bins(np.array([[RED]], np.uint8), 8)[0, 0]
+    assert cue.templates.sum() == pytest.approx(1.0)
+    assert cue.templates[0, red] == pytest.approx(1.0)         # no grey: it is not foreground
+    assert plain.templates[0, red] < 0.9
+    plain = ColourCue()
+    plain.add_target(image, [5, 5, 10, 10])
+    assert cue.add_target(image, [5, 5, 10, 10], foreground=half) == 1     # no foreground in that box
+    np.testing.assert_array_equal(cue.templates[1], plain.templates[0])
+
+
+def test_foreground_cue_needs_a_mask():
+    image, mask, boxes = foreground_scene()
+    cue = ForegroundColourCue()
+    with pytest.raises(TrackingError, match="foreground mask"):
+        cue.set_templates(image, boxes)
+    cue.set_templates(image, boxes, foreground=mask)
+    with pytest.raises(TrackingError, match="Observation.foreground"):
+        cue.log_likelihoods(observation(image, boxes), states_at([50, 50]), np.array([0]))
+
+
+# -- all cues --------------------------------------------------------------------------------------
+def all_cues(image, boxes, mask):
+    colour, foreground = ColourCue(), ForegroundColourCue()
+    colour.set_templates(image, boxes)
+    foreground.set_templates(image, boxes, foreground=mask)
+    return [LocationCue(), colour, foreground]
+
+
+def test_shapes_are_particles_by_targets_plus_false_alarm():
+    image, boxes = scene_with_targets()
+    boxes = np.vstack([boxes, [[5.0, 70.0, 10.0, 20.0]]])
+    mask = np.zeros(image.shape[:2], bool)
+    mask[20:60, 30:50] = True
+    obs = observation(image, boxes, foreground=mask, previous=np.array([[40.0, 40.0], [100.0, 60.0]]))
+    rng = np.random.default_rng(0)
+    states = np.column_stack([rng.uniform(0, 140, (30, 2)), np.zeros((30, 2)), rng.normal(0, 0.1, 30)])
+    owner = rng.integers(0, 3, 30)
+    for cue in all_cues(image, boxes, mask):
+        assert isinstance(cue, Cue)
+        scores = cue.log_likelihoods(obs, states, owner)
+        assert scores.shape == (30, 4) and np.isfinite(scores).all() and (scores <= 0).all()
+        assert cue.log_likelihoods(obs, np.zeros((0, 5)), np.zeros(0, dtype=int)).shape == (0, 4)
+
+
+def test_particles_outside_the_image_give_finite_values():
+    image, boxes = scene_with_targets()
+    mask = np.zeros(image.shape[:2], bool)
+    mask[20:60, 30:50] = True
+    obs = observation(image, boxes, foreground=mask, previous=np.array([[40.0, 40.0]]))
+    states = states_at([-5, 40], [145, 90], [-1e6, -1e6], [1e6, 50], [70, -500])
+    states = np.vstack([states, states_at([40, 40], log_scale=200.0), states_at([40, 40], log_scale=-200.0)])
+    owner = np.zeros(len(states), dtype=int)
+    for cue in all_cues(image, boxes, mask):
+        scores = cue.log_likelihoods(obs, states, owner)
+        assert not np.isnan(scores).any() and not np.isposinf(scores).any(), cue.name
+        if cue.name != "location":
+            assert np.isfinite(scores).all(), cue.name
+
+
+def test_cue_outputs_feed_the_fusion():
+    image, boxes = scene_with_targets()
+    location, colour = LocationCue(), ColourCue()
+    colour.set_templates(image, boxes)
+    obs = observation(image, boxes, previous=np.array([[0.0, 0.0], [140.0, 100.0]]))
+    states = states_at([40, 40], [130, 10])                # on target 1; on the background, far from both
+    owner = np.array([0, 0])
+    result = CueFusion(2).fuse([location.log_likelihoods(obs, states, owner),
+                                colour.log_likelihoods(obs, states, owner)], owner)
+    assert result.weights[0] > 0.9 > 0.1 > result.weights[1]
+
+
+def test_registry_builds_every_cue():
+    assert set(CUES) == {"colour", "location", "foreground"}
+    assert make_cue("colour", bins=4, sigma=0.2).config == ColourConfig(bins=4, sigma=0.2)
+    assert isinstance(make_cue("foreground"), ForegroundColourCue)
+    assert isinstance(make_cue("colour"), AppearanceCue) and not isinstance(make_cue("location"), AppearanceCue)
+    with pytest.raises(UnknownCueError, match="known cues: colour, location, foreground"):
+        make_cue("edges")
+    with pytest.raises(TrackingError, match="no option bins; its options are sigma, fa_mode"):
+        make_cue("location", bins=3)
+
+
+@pytest.mark.parametrize("build, message", [
+    (lambda: LocationConfig(sigma=0), "sigma must be a positive"),
+    (lambda: LocationConfig(sigma=float("nan")), "sigma must be a positive"),
+    (lambda: LocationConfig(fa_mode="middle"), "fa_mode must be one of centroid, nearest"),
+    (lambda: ColourConfig(bins=0), "bins must be a positive integer"),
+    (lambda: ColourConfig(bins=32), "bins must be at most 16"),
+    (lambda: ColourConfig(bins=8.0), "bins must be a positive integer"),
+    (lambda: ColourConfig(sigma=-0.1), "sigma must be a positive"),
+    (lambda: ColourConfig(samples=(12,)), "samples must be a pair"),
+    (lambda: ColourConfig(samples=(0, 5)), "samples must be a positive integer"),
+    (lambda: ColourConfig(fa_hist="divide"), "fa_hist must be one of subtract, counts"),
+    (lambda: LocationCue(ColourConfig()), "needs a LocationConfig"),
+    (lambda: BackgroundConfig(history=0), "history must be a positive integer"),
+    (lambda: BackgroundConfig(var_threshold=-1), "var_threshold must be a positive"),
+    (lambda: BackgroundConfig(background_ratio=1.5), r"background_ratio must lie in \(0, 1\]"),
+    (lambda: BackgroundConfig(learning_rate=2.0), "learning_rate must be None or lie in"),
+    (lambda: BackgroundConfig(detect_shadows="yes"), "detect_shadows must be True or False"),
+])
+def test_bad_configurations_raise_clear_errors(build, message):
+    with pytest.raises(TrackingError, match=message):
+        build()
+
+
+def test_bad_inputs_raise_clear_errors():
+    image, boxes = scene_with_targets()
+    obs = observation(image, boxes)
+    cue = ColourCue()
+    cue.set_templates(image, boxes[:1])
+    with pytest.raises(TrackingError, match="holds 1 target templates but the observation has 2"):
+        cue.log_likelihoods(obs, states_at([40, 40]), np.array([0]))
+    with pytest.raises(TrackingError, match=r"states must have shape \(P, 5\)"):
+        LocationCue().log_likelihoods(obs, np.zeros((3, 4)), np.zeros(3, dtype=int))
+    with pytest.raises(TrackingError, match="owners must be target indices 0..1"):
+        LocationCue().log_likelihoods(obs, states_at([1, 1]), np.array([2]))
+    with pytest.raises(TrackingError, match="must be finite"):
+        LocationCue().log_likelihoods(obs, states_at([np.nan, 1]), np.array([0]))
+    with pytest.raises(TrackingError, match=r"\(H, W, 3\) uint8"):
+        Observation(image.astype(float), None, obs.centres, obs.sizes, np.zeros((0, 2)))
+    with pytest.raises(TrackingError, match="mask > 0"):
+        Observation(image, np.zeros(image.shape[:2], np.uint8), obs.centres, obs.sizes, np.zeros((0, 2)))
+    with pytest.raises(TrackingError, match="lies outside the 140×100 image"):
+        cue.add_target(image, [150, 10, 5, 5])
+    with pytest.raises(TrackingError, match="positive width and height"):
+        cue.add_target(image, [10, 10, 0, 5])
+
+
+# -- background model ------------------------------------------------------------------------------
+def textured_background(rng, height=60, width=80):
+    return rng.integers(40, 200, size=(height, width, 3)).astype(np.uint8)
+
+
+def noisy(frame, rng):
+    return np.clip(frame + rng.normal(0, 2, frame.shape), 0, 255).astype(np.uint8)
+
+
+def test_background_model_flags_a_moving_square():
+    rng = np.random.default_rng(5)
+    scene = textured_background(rng)
+    model = BackgroundModel()
+    assert model.warm_up(noisy(scene, rng) for _ in range(30)) == 30
+    for step in range(6):
+        frame = noisy(scene, rng)
+        x, y = 10 + 8 * step, 15 + 3 * step
+        frame[y:y + 12, x:x + 12] = GREEN
+        mask = model.apply(frame)
+        square = np.zeros(mask.shape, bool)
+        square[y:y + 12, x:x + 12] = True
+        assert mask.dtype == np.bool_ and mask.shape == scene.shape[:2]
+        assert mask[square].mean() > 0.95
+        assert mask[~square].mean() < 0.01
+    assert model.frames_seen == 36
+
+
+def test_background_model_counts_shadows_as_background_when_asked():
+    rng = np.random.default_rng(6)
+    scene = textured_background(rng)
+    frame = scene.copy()
+    frame[10:30, 10:30] = (scene[10:30, 10:30] * 0.7).astype(np.uint8)     # darker, same chromaticity
+    shadow = np.zeros(scene.shape[:2], bool)
+    shadow[10:30, 10:30] = True
+    fractions = {}
+    for detect in (True, False):
+        model = BackgroundModel(BackgroundConfig(detect_shadows=detect))
+        model.warm_up(noisy(scene, rng) for _ in range(30))
+        fractions[detect] = model.apply(frame)[shadow].mean()
+    assert fractions[True] < 0.05 and fractions[False] > 0.95
+
+
+def test_background_model_rejects_frames_of_another_shape():
+    model = BackgroundModel()
+    model.apply(np.zeros((20, 30, 3), np.uint8))
+    with pytest.raises(TrackingError, match="differs from the model's"):
+        model.apply(np.zeros((30, 20, 3), np.uint8))
+    with pytest.raises(TrackingError, match="uint8"):
+        model.apply(np.zeros((20, 30, 3)))
+
+
+# -- docstring examples ----------------------------------------------------------------------------
+@pytest.mark.parametrize("module", [cues, background], ids=lambda m: m.__name__)
+def test_docstring_examples(module):
+    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
+    assert result.attempted > 0 and result.failed == 0
