@@ -17,7 +17,6 @@ import json
 import sys
 from collections.abc import Sequence
 from importlib.metadata import entry_points
-from pathlib import Path
 from typing import Any
 
 from belief.errors import BeliefError, FormatError
@@ -25,6 +24,7 @@ from belief.frame import Frame
 from belief.lattice import hyper_power_set
 from belief.mass import MassFunction
 from belief.model import Model
+from belief.textfiles import read_text
 
 __all__ = ["main", "build_parser", "ENTRY_POINT_GROUP"]
 
@@ -42,16 +42,7 @@ class _Parser(argparse.ArgumentParser):
 
 # -- helpers ------------------------------------------------------------------------------------
 def _read_json(path: str, what: str) -> Any:
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise FormatError(f"cannot read {what} {path!r}: no such file") from None
-    except IsADirectoryError:
-        raise FormatError(f"cannot read {what} {path!r}: it is a directory") from None
-    except UnicodeDecodeError:
-        raise FormatError(f"cannot read {what} {path!r}: not UTF-8 text") from None
-    except OSError as exc:
-        raise FormatError(f"cannot read {what} {path!r}: {exc.strerror or exc}") from None
+    text = read_text(path, what)
     try:
         return json.loads(text)
     except json.JSONDecodeError as exc:

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from belief.textfiles import read_text
 from plugins.video_tracking.errors import TrackFileError, TrackingError
 
 __all__ = [
@@ -91,17 +92,7 @@ def read_mot(path: str | PathLike[str]) -> np.ndarray:
            [ 2.,  7., 12., 20., 30., 40.,  0.]])
     """
     name = str(path)
-    try:
-        with open(path, encoding="utf-8-sig") as handle:
-            text = handle.read()
-    except FileNotFoundError:
-        raise TrackFileError(f"cannot read track file {name!r}: no such file") from None
-    except IsADirectoryError:
-        raise TrackFileError(f"cannot read track file {name!r}: it is a directory") from None
-    except UnicodeDecodeError:
-        raise TrackFileError(f"cannot read track file {name!r}: not UTF-8 text") from None
-    except OSError as exc:
-        raise TrackFileError(f"cannot read track file {name!r}: {exc.strerror or exc}") from None
+    text = read_text(path, "track file", TrackFileError, encoding="utf-8-sig")
 
     rows: list[list[float]] = []
     first_line_of: dict[tuple[int, int], int] = {}
