@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from belief.errors import BeliefError
 
-__all__ = ["TrackingError", "TrackFileError", "UnknownCueError"]
+__all__ = ["TrackingError", "TrackFileError", "UnknownCueError", "VideoError", "InitError"]
 
 
 class TrackingError(BeliefError, ValueError):
@@ -22,3 +22,11 @@ class TrackFileError(TrackingError):
 
 class UnknownCueError(TrackingError):
     """A cue name that the cue registry does not know; the message lists the known names."""
+
+
+class VideoError(TrackingError):
+    """A video is missing, cannot be opened or decoded, or cannot be written."""
+
+
+class InitError(TrackingError):
+    """Target initialisation is unusable: an empty or malformed init file, or a box outside the image."""

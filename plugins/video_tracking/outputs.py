@@ -1,0 +1,183 @@
+"""The files of a tracking run: tracks, diagnostics, summary and the diagnostics plot.
+
+* ``tracks.txt`` — MOTChallenge CSV ``frame,id,x,y,w,h,-1,-1,-1,-1`` (1-based frame and corner);
+* ``diagnostics.csv`` — per frame and target, the means of W (33)–(35) and more
+  (:data:`plugins.video_tracking.tracker.DIAGNOSTIC_COLUMNS`);
+* ``summary.json`` — frames, speed, parameters, seed, version and scores;
+* ``diagnostics.png`` — the curves of W's Fig. 10, one line per target.
+
+:class:`StagedOutputs` writes every file under a temporary name and renames them all at the
+end, ``summary.json`` last, so a run that fails leaves nothing that looks complete.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+from collections.abc import Mapping, Sequence
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["StagedOutputs", "write_tracks", "write_diagnostics", "write_summary", "plot_diagnostics",
+           "DIAGNOSTIC_HEADER"]
+
+#: Header of ``diagnostics.csv``.
+DIAGNOSTIC_HEADER = ("frame", "id", "mean_m_target", "mean_m_intersection", "mean_bel", "mean_m_empty", "mean_r",
+                     "particles", "ess")
+
+
+class StagedOutputs:
+    """Output files written under temporary names, renamed into place by :meth:`commit`.
+
+    Parameters
+    ----------
+    out_dir : path
+        The output directory; created if needed (and removed again by :meth:`abort` if it was
+        created here and is left empty).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp()) / "run"
+    >>> staged = StagedOutputs(folder)
+    >>> _ = staged.path("tracks.txt").write_text("1,1,1,1,2,2,-1,-1,-1,-1\\n")
+    >>> sorted(p.name for p in folder.iterdir())
+    ['.tracks.partial.txt']
+    >>> _ = staged.commit()
+    >>> sorted(p.name for p in folder.iterdir())
+    ['tracks.txt']
+    """
+
+    def __init__(self, out_dir: str | PathLike[str]) -> None:
+        self.out_dir = Path(out_dir)
+        if self.out_dir.exists() and not self.out_dir.is_dir():
+            from plugins.video_tracking.errors import TrackingError
+
+            raise TrackingError(f"the output {str(out_dir)!r} exists and is not a directory")
+        self._created = not self.out_dir.exists()
+        try:
+            self.out_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            from plugins.video_tracking.errors import TrackingError
+
+            raise TrackingError(f"cannot create the output directory {str(out_dir)!r}: "
+                                f"{exc.strerror or exc}") from None
+        self._staged: dict[str, Path] = {}
+
+    def path(self, name: str) -> Path:
+        """The temporary path under which the final file ``name`` is written (same suffix)."""
+        final = Path(name)
+        staged = self.out_dir / f".{final.stem}.partial{final.suffix}"
+        self._staged[name] = staged
+        return staged
+
+    def commit(self) -> dict[str, Path]:
+        """Rename every staged file to its final name, ``summary.json`` last; returns the final paths."""
+        order = sorted(self._staged, key=lambda name: name == "summary.json")
+        final = {}
+        for name in order:
+            staged = self._staged[name]
+            if staged.exists():
+                os.replace(staged, self.out_dir / name)
+                final[name] = self.out_dir / name
+        self._staged.clear()
+        return final
+
+    def abort(self) -> None:
+        """Delete the staged files (and the output directory if it was created here and is empty)."""
+        for staged in self._staged.values():
+            try:
+                staged.unlink()
+            except FileNotFoundError:
+                pass
+        self._staged.clear()
+        if self._created:
+            try:
+                self.out_dir.rmdir()
+            except OSError:
+                pass
+
+
+def write_tracks(path: str | PathLike[str], rows: Sequence[Sequence[float]]) -> None:
+    """Write MOTChallenge rows ``frame,id,x,y,w,h,-1,-1,-1,-1`` (frames and ids as integers, boxes to 0.001 px)."""
+    with open(path, "w", encoding="ascii", newline="\n") as handle:
+        for row in rows:
+            frame, track_id, x, y, w, h = row[:6]
+            handle.write(f"{int(frame)},{int(track_id)},{x:.3f},{y:.3f},{w:.3f},{h:.3f},-1,-1,-1,-1\n")
+
+
+def write_diagnostics(path: str | PathLike[str], records: Sequence[Mapping[str, float]]) -> None:
+    """Write one CSV line per frame and target, columns :data:`DIAGNOSTIC_HEADER`."""
+    with open(path, "w", encoding="ascii", newline="") as handle:
+        writer = csv.writer(handle, lineterminator="\n")
+        writer.writerow(DIAGNOSTIC_HEADER)
+        for record in records:
+            writer.writerow([_cell(record[name]) for name in DIAGNOSTIC_HEADER])
+
+
+def _cell(value: float) -> str:
+    if isinstance(value, (int, np.integer)) or (isinstance(value, float) and value.is_integer() and abs(value) < 1e15):
+        return str(int(value))
+    return f"{float(value):.6g}"
+
+
+def write_summary(path: str | PathLike[str], summary: Mapping[str, Any]) -> None:
+    """Write the run summary as indented JSON (NaN becomes null)."""
+    with open(path, "w", encoding="utf-8") as handle:
+        json.dump(_json_ready(summary), handle, indent=2, allow_nan=False)
+        handle.write("\n")
+
+
+def _json_ready(value: Any) -> Any:
+    if isinstance(value, Mapping):
+        return {str(k): _json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_ready(v) for v in value]
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return None if not math.isfinite(value) else float(value)
+    if isinstance(value, (np.bool_,)):
+        return bool(value)
+    return value
+
+
+def plot_diagnostics(path: str | PathLike[str], records: Sequence[Mapping[str, float]], title: str = "") -> None:
+    """The diagnostics curves of W's Fig. 10, one line per target, as a PNG.
+
+    Four panels over the frames: mean m(θ_j) (W (33)), mean mass on intersections with θ_j
+    (W (34)), mean Bel(θ_j) (W (35)) and mean m(∅).  Uses matplotlib's Agg canvas directly,
+    so no global backend is touched.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    panels = (("mean_m_target", "mean m(θj)  [W (33)]"),
+              ("mean_m_intersection", "mean m(θj ∩ …)  [W (34)]"),
+              ("mean_bel", "mean Bel(θj)  [W (35)]"),
+              ("mean_m_empty", "mean m(∅)"))
+    figure = Figure(figsize=(10, 7), layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.subplots(2, 2, sharex=True)
+    ids = sorted({int(r["id"]) for r in records})
+    many = len(ids) > 10
+    for ax, (key, label) in zip(axes.ravel(), panels):
+        for track_id in ids:
+            own = [r for r in records if int(r["id"]) == track_id]
+            ax.plot([r["frame"] for r in own], [r[key] for r in own], linewidth=0.9 if many else 1.3,
+                    label=f"target {track_id}")
+        ax.set_title(label)
+        ax.set_ylim(-0.02, 1.02)
+        ax.grid(True, alpha=0.3)
+    for ax in axes[1]:
+        ax.set_xlabel("frame")
+    if ids and not many:
+        axes[0, 0].legend(fontsize="small")
+    if title:
+        figure.suptitle(title)
+    figure.savefig(path, dpi=100, format="png")

@@ -1,0 +1,765 @@
+"""The multi-target DSmT particle-filter tracker (SPEC B.3 W-S1..S6, generalised in Part D).
+
+One :class:`~plugins.video_tracking.particles.ParticleSet` per live target.  Every frame
+
+1. the background model gives the foreground mask (SPEC B.4), when the foreground cue is used;
+2. every target's particles are propagated by the constant-velocity model (W-S2);
+3. an :class:`~plugins.video_tracking.cues.Observation` is built from the t − 1 estimates and
+   the t − 1 particles of *all* live targets (so the centroid, d_max and q_FA are recomputed
+   every frame, Part D);
+4. the particles of all targets are stacked into one ``(P, 5)`` array with an owner array,
+   every cue scores them against {θ_1..θ_τ, FA}, and
+   :class:`~plugins.video_tracking.fusion.CueFusion` fuses the cues and weighs each particle
+   by Bel(θ_J) (or Pls / BetP) of its own target J (W (7), W (32), W-S3);
+5. per target: the weights are normalised within the set, the state is estimated (W (6),
+   W-S4), the diagnostics W (33)–(35) are recorded, and the set is resampled (W-S5).
+
+Nothing costs 2^τ: the cues are linear in τ·P, and the fusion stores only focal elements.
+Targets are born and removed by an :class:`InitPlan` (a MOTChallenge ground truth, or boxes
+for the first frame).  Every random draw comes from the one ``numpy.random.Generator`` given to
+the tracker, so a run is reproducible from its seed.
+
+Frame numbers are 1-based (as in MOTChallenge files); boxes ``(x, y, w, h)`` inside the
+tracker are 0-based pixels with the top-left corner at ``(x, y)``, as in :mod:`cues`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from os import PathLike
+
+import numpy as np
+
+from belief.errors import BeliefError
+from belief.rules import get_rule, inconsistency
+from plugins.video_tracking.background import BackgroundConfig, BackgroundModel
+from plugins.video_tracking.cues import (
+    CUES,
+    AppearanceCue,
+    ColourConfig,
+    LocationConfig,
+    Observation,
+)
+from plugins.video_tracking.errors import InitError, TrackingError, UnknownCueError
+from plugins.video_tracking.evaluation import read_mot
+from plugins.video_tracking.fusion import WEIGHTS, CueFusion, FusionConfig, cue_masses
+from plugins.video_tracking.particles import (
+    CX,
+    CY,
+    LOG_SCALE,
+    RESAMPLERS,
+    ConstantVelocity,
+    MotionConfig,
+    ParticleSet,
+    adaptive_count,
+    initialise,
+)
+
+__all__ = [
+    "TrackerConfig",
+    "TargetInit",
+    "InitPlan",
+    "Estimate",
+    "Tracker",
+    "init_from_gt",
+    "init_from_boxes",
+    "read_init_boxes",
+    "DIAGNOSTIC_COLUMNS",
+    "Summary",
+    "run",
+]
+
+#: Columns of a target's diagnostics, per frame (W (33)–(35), SPEC B.3): unweighted means over
+#: the target's particles of m(θ_J), of the mass on intersections containing θ_J, of
+#: Bel(θ_J), of m(∅), of the inconsistency R of the first fold (W (10)), the particle count and
+#: the effective sample size of the fused weights before resampling.
+DIAGNOSTIC_COLUMNS = ("mean_m_target", "mean_m_intersection", "mean_bel", "mean_m_empty", "mean_r",
+                      "particles", "ess")
+
+
+# -- configuration --------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class TrackerConfig:
+    """Settings of the tracker (SPEC B.3 defaults unless noted).
+
+    Attributes
+    ----------
+    particles : int
+        N, particles per target (the maximum when ``adaptive`` is on).
+    cues : tuple of str
+        Cue names of :data:`plugins.video_tracking.cues.CUES`, in fusion order: the
+        R-weighted rule folds the cues in this order (SPEC Part D), so it is recorded.
+    rule : str
+        A combination rule of :data:`belief.RULES` (default: the R-weighted rule).
+    weight : {"bel", "pls", "betp"}
+        The measure of θ_J that weighs a particle of target J (W (32)).
+    r_mode, empty_mode : str
+        Options of the R-weighted rule.
+    motion : MotionConfig
+        Noise of the constant-velocity model.
+    resampling : str
+        A resampler of :data:`plugins.video_tracking.particles.RESAMPLERS`.
+    ess_threshold : float in [0, 1]
+        Resample when N_eff < threshold·N; 1 resamples every frame (the papers' choice).
+    adaptive : bool
+        Adapt N to the conflict (SPEC B.3): N_{t+1} = N_min + ⌈(N − N_min)·κ_t⌉ with
+        N_min = ⌈N / 2⌉ and κ_t the mean R of the frame.
+    location, colour, foreground : LocationConfig, ColourConfig, ColourConfig
+        Settings of the location, colour and foreground-masked colour cues.
+    background : BackgroundConfig
+        The background model of the foreground cue.
+    init_sigma : float
+        Spread in pixels of a newborn target's particles around its box centre (W-S1).
+
+    Raises
+    ------
+    TrackingError
+        An unknown cue (:class:`UnknownCueError`), rule, weight or resampler, a repeated cue,
+        or a bad count; the message names the field.
+
+    Examples
+    --------
+    >>> TrackerConfig().cues
+    ('colour', 'location', 'foreground')
+    >>> TrackerConfig(cues=("colour", "edges"))
+    Traceback (most recent call last):
+    ...
+    plugins.video_tracking.errors.UnknownCueError: unknown cue 'edges'; known cues: colour, location, foreground
+    """
+
+    particles: int = 100
+    cues: tuple[str, ...] = ("colour", "location", "foreground")
+    rule: str = "r_rule"
+    weight: str = "bel"
+    r_mode: str = "paper"
+    empty_mode: str = "union"
+    motion: MotionConfig = field(default_factory=MotionConfig)
+    resampling: str = "systematic"
+    ess_threshold: float = 1.0
+    adaptive: bool = False
+    location: LocationConfig = field(default_factory=LocationConfig)
+    colour: ColourConfig = field(default_factory=ColourConfig)
+    foreground: ColourConfig = field(default_factory=ColourConfig)
+    background: BackgroundConfig = field(default_factory=BackgroundConfig)
+    init_sigma: float = 5.0
+
+    def __post_init__(self) -> None:
+        if isinstance(self.particles, bool) or not isinstance(self.particles, (int, np.integer)) \
+                or self.particles < 1:
+            raise TrackingError(f"TrackerConfig.particles must be a positive integer, got {self.particles!r}")
+        object.__setattr__(self, "particles", int(self.particles))
+        cues = (self.cues,) if isinstance(self.cues, str) else tuple(self.cues)
+        if not cues:
+            raise TrackingError("TrackerConfig.cues must name at least one cue")
+        for name in cues:
+            if name not in CUES:
+                raise UnknownCueError(f"unknown cue {name!r}; known cues: {', '.join(CUES)}")
+        if len(set(cues)) != len(cues):
+            raise TrackingError(f"TrackerConfig.cues names a cue twice: {', '.join(cues)}")
+        object.__setattr__(self, "cues", cues)
+        try:
+            self.fusion_config()
+        except BeliefError as exc:
+            if isinstance(exc, TrackingError):
+                raise
+            raise TrackingError(str(exc)) from None
+        if self.weight not in WEIGHTS:
+            raise TrackingError(f"TrackerConfig.weight must be one of {', '.join(WEIGHTS)}, got {self.weight!r}")
+        if self.resampling not in RESAMPLERS:
+            raise TrackingError(f"unknown resampler {self.resampling!r}; known: {', '.join(sorted(RESAMPLERS))}")
+        if not isinstance(self.ess_threshold, (int, float)) or not 0.0 <= self.ess_threshold <= 1.0:
+            raise TrackingError(f"TrackerConfig.ess_threshold must lie in [0, 1], got {self.ess_threshold!r}")
+        if not isinstance(self.init_sigma, (int, float)) or not math.isfinite(self.init_sigma) \
+                or self.init_sigma < 0:
+            raise TrackingError(f"TrackerConfig.init_sigma must be a non-negative number, got {self.init_sigma!r}")
+        for name, kind in (("motion", MotionConfig), ("location", LocationConfig), ("colour", ColourConfig),
+                           ("foreground", ColourConfig), ("background", BackgroundConfig)):
+            if not isinstance(getattr(self, name), kind):
+                raise TrackingError(f"TrackerConfig.{name} must be a {kind.__name__}")
+
+    def fusion_config(self) -> FusionConfig:
+        """The :class:`FusionConfig` of these settings (raises ``UnknownRuleError`` for a bad rule)."""
+        get_rule(self.rule)
+        return FusionConfig(rule=self.rule, weight=self.weight, r_mode=self.r_mode, empty_mode=self.empty_mode)
+
+    def cue_config(self, name: str):
+        """The settings object of cue ``name``."""
+        return {"location": self.location, "colour": self.colour, "foreground": self.foreground}[name]
+
+    @property
+    def uses_background(self) -> bool:
+        """Whether a background model is needed (the foreground cue is on)."""
+        return "foreground" in self.cues
+
+
+# -- target births and deaths ---------------------------------------------------------------------
+@dataclass(frozen=True)
+class TargetInit:
+    """One target of an :class:`InitPlan`.
+
+    Attributes
+    ----------
+    id : int
+        The track id written to ``tracks.txt``.
+    first_frame : int
+        1-based frame at which the target is born, at ``box``.
+    last_frame : int or None
+        1-based frame after which it is removed; None keeps it to the end.
+    box : (float, float, float, float)
+        ``x, y, w, h`` in 0-based pixels: the initial centre and the base size.
+    """
+
+    id: int
+    first_frame: int
+    last_frame: int | None
+    box: tuple[float, float, float, float]
+
+    def __post_init__(self) -> None:
+        box = tuple(float(v) for v in self.box)
+        if len(box) != 4 or not all(math.isfinite(v) for v in box) or box[2] <= 0 or box[3] <= 0:
+            raise InitError(f"target {self.id}: the box must be finite with a positive size, got {self.box!r}")
+        if self.first_frame < 1 or (self.last_frame is not None and self.last_frame < self.first_frame):
+            raise InitError(f"target {self.id}: bad frame range {self.first_frame}..{self.last_frame}")
+        object.__setattr__(self, "box", box)
+
+
+@dataclass(frozen=True)
+class InitPlan:
+    """When each target is born and removed.
+
+    Attributes
+    ----------
+    targets : tuple of TargetInit
+        Distinct ids, in birth order (then id order).
+    source : str
+        Where the plan came from, for the summary.
+    """
+
+    targets: tuple[TargetInit, ...]
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        targets = tuple(sorted(self.targets, key=lambda t: (t.first_frame, t.id)))
+        if not targets:
+            raise InitError(f"{self.source or 'the init'}: no target to track")
+        ids = [t.id for t in targets]
+        if len(set(ids)) != len(ids):
+            raise InitError(f"{self.source or 'the init'}: a target id appears twice")
+        object.__setattr__(self, "targets", targets)
+
+    def check_image(self, width: int, height: int) -> None:
+        """Raise :class:`InitError` if a birth box does not overlap a ``width`` × ``height`` image."""
+        for target in self.targets:
+            x, y, w, h = target.box
+            if x >= width or y >= height or x + w <= 0 or y + h <= 0:
+                raise InitError(f"{self.source or 'init'}: the box of target {target.id} "
+                                f"(x={x + 1:g}, y={y + 1:g}, w={w:g}, h={h:g}, 1-based) lies outside the "
+                                f"{width}x{height} image")
+
+    def births(self, frame: int) -> list[TargetInit]:
+        """Targets born at 1-based ``frame``."""
+        return [t for t in self.targets if t.first_frame == frame]
+
+
+def init_from_gt(gt: str | PathLike[str] | np.ndarray, source: str | None = None) -> InitPlan:
+    """Targets from a MOTChallenge ground truth: each id is born at its first box, removed after its last.
+
+    Parameters
+    ----------
+    gt : path or ndarray, shape (M, ≥6)
+        A file for :func:`~plugins.video_tracking.evaluation.read_mot`, or its rows
+        ``frame, id, x, y, w, h, ...`` (1-based frames and corners).
+
+    Examples
+    --------
+    >>> rows = np.array([[1, 7, 11, 21, 10, 20], [2, 7, 12, 21, 10, 20], [2, 3, 1, 1, 5, 5]])
+    >>> [(t.id, t.first_frame, t.last_frame, t.box) for t in init_from_gt(rows).targets]
+    [(7, 1, 2, (10.0, 20.0, 10.0, 20.0)), (3, 2, 2, (0.0, 0.0, 5.0, 5.0))]
+    """
+    if isinstance(gt, np.ndarray):
+        rows, name = np.asarray(gt, dtype=np.float64), source or "ground truth"
+    else:
+        rows, name = read_mot(gt), source or str(gt)
+    if rows.ndim != 2 or rows.shape[0] == 0 or rows.shape[1] < 6:
+        raise InitError(f"{name}: no boxes to initialise the targets from")
+    targets = []
+    for track_id in np.unique(rows[:, 1]):
+        own = rows[rows[:, 1] == track_id]
+        own = own[np.argsort(own[:, 0], kind="stable")]
+        first = own[0]
+        box = (first[2] - 1.0, first[3] - 1.0, first[4], first[5])
+        if first[4] <= 0 or first[5] <= 0:
+            raise InitError(f"{name}: the first box of id {int(track_id)} has no area")
+        targets.append(TargetInit(int(track_id), int(own[0, 0]), int(own[-1, 0]), box))
+    return InitPlan(tuple(targets), source=name)
+
+
+def read_init_boxes(path: str | PathLike[str]) -> InitPlan:
+    """Targets from a CSV of ``id,x,y,w,h`` lines, all born at frame 1 and never removed.
+
+    ``x, y`` is the top-left corner in the MOTChallenge convention (1-based, as in
+    ``tracks.txt`` and ground-truth files).  Blank lines and lines starting with ``#`` are
+    skipped, and so is a first line ``id,x,y,w,h``.
+
+    Raises
+    ------
+    InitError
+        Missing, unreadable or empty file, a malformed line (named with its number), a
+        non-positive size or a repeated id.
+    """
+    name = str(path)
+    try:
+        with open(path, encoding="utf-8-sig") as handle:
+            text = handle.read()
+    except FileNotFoundError:
+        raise InitError(f"cannot read init file {name!r}: no such file") from None
+    except IsADirectoryError:
+        raise InitError(f"cannot read init file {name!r}: it is a directory") from None
+    except (UnicodeDecodeError, OSError) as exc:
+        raise InitError(f"cannot read init file {name!r}: {getattr(exc, 'strerror', None) or exc}") from None
+    targets = []
+    seen: set[int] = set()
+    for number, line in enumerate(text.splitlines(), start=1):
+        stripped = line.strip()
+        if not stripped or stripped.startswith("#"):
+            continue
+        fields_ = [f.strip() for f in stripped.split(",")]
+        if not targets and [f.lower() for f in fields_] == ["id", "x", "y", "w", "h"]:
+            continue
+        if len(fields_) != 5:
+            raise InitError(f"{name}, line {number}: expected 5 fields id,x,y,w,h, got {len(fields_)}")
+        try:
+            values = [float(f) for f in fields_]
+        except ValueError:
+            raise InitError(f"{name}, line {number}: a field is not a number: {stripped!r}") from None
+        if not all(math.isfinite(v) for v in values):
+            raise InitError(f"{name}, line {number}: a field is not finite")
+        track_id, x, y, w, h = values
+        if track_id != int(track_id):
+            raise InitError(f"{name}, line {number}: the id must be an integer, got {track_id:g}")
+        if w <= 0 or h <= 0:
+            raise InitError(f"{name}, line {number}: the box needs a positive width and height, got {w:g} x {h:g}")
+        if int(track_id) in seen:
+            raise InitError(f"{name}, line {number}: id {int(track_id)} appears twice")
+        seen.add(int(track_id))
+        targets.append(TargetInit(int(track_id), 1, None, (x - 1.0, y - 1.0, w, h)))
+    if not targets:
+        raise InitError(f"init file {name!r} holds no boxes (it is empty)")
+    return InitPlan(tuple(targets), source=name)
+
+
+def init_from_boxes(boxes: Iterable[Sequence[float]], ids: Sequence[int] | None = None) -> InitPlan:
+    """Targets at 0-based boxes ``(x, y, w, h)``, born at frame 1 and never removed.
+
+    Examples
+    --------
+    >>> init_from_boxes([(10, 20, 8, 16)]).targets[0]
+    TargetInit(id=1, first_frame=1, last_frame=None, box=(10.0, 20.0, 8.0, 16.0))
+    """
+    boxes = [tuple(b) for b in boxes]
+    ids = list(range(1, len(boxes) + 1)) if ids is None else list(ids)
+    if len(ids) != len(boxes):
+        raise InitError(f"{len(ids)} ids for {len(boxes)} boxes")
+    return InitPlan(tuple(TargetInit(int(i), 1, None, b) for i, b in zip(ids, boxes)), source="boxes")
+
+
+# -- the tracker ----------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Estimate:
+    """One target's output at one frame.
+
+    Attributes
+    ----------
+    frame : int
+        1-based frame number.
+    id : int
+        Track id.
+    state : ndarray, shape (5,)
+        The weighted-mean state (W (6)); a newborn target's is its box centre.
+    box : (float, float, float, float)
+        ``x, y, w, h`` in 0-based pixels: centre of the estimate, base size × exp(log_scale).
+    diagnostics : dict of str to float, or None
+        :data:`DIAGNOSTIC_COLUMNS` of this frame; None at the birth frame (nothing was fused).
+    """
+
+    frame: int
+    id: int
+    state: np.ndarray
+    box: tuple[float, float, float, float]
+    diagnostics: dict[str, float] | None = None
+
+    def mot_row(self) -> list[float]:
+        """``frame, id, x, y, w, h, -1, -1, -1, -1`` with a 1-based top-left corner (MOTChallenge)."""
+        x, y, w, h = self.box
+        return [self.frame, self.id, x + 1.0, y + 1.0, w, h, -1, -1, -1, -1]
+
+
+@dataclass
+class _Target:
+    id: int
+    last_frame: int | None
+    size: np.ndarray          # (2,) base w, h
+    particles: ParticleSet
+    estimate: np.ndarray      # (5,) at t − 1
+
+
+class Tracker:
+    """Tracks the targets of an :class:`InitPlan` through a sequence of frames.
+
+    Parameters
+    ----------
+    config : TrackerConfig
+    init : InitPlan
+        Births and deaths of the targets.
+    rng : numpy.random.Generator
+        The only source of randomness (initialisation, motion noise, resampling).
+
+    Attributes
+    ----------
+    targets : list
+        The live targets in the order of the cues' templates (birth order).
+
+    Examples
+    --------
+    >>> from plugins.video_tracking import scenes
+    >>> scene = scenes.render(scenes.crossing(0))
+    >>> plan = init_from_gt(scene.ground_truth)
+    >>> tracker = Tracker(TrackerConfig(particles=20), plan, np.random.default_rng(0))
+    >>> estimates = [tracker.step(t + 1, scene.frame(t)) for t in range(3)]
+    >>> [e.id for e in estimates[-1]], all(np.isfinite(e.box).all() for e in estimates[-1])
+    ([1, 2], True)
+    """
+
+    def __init__(self, config: TrackerConfig, init: InitPlan, rng: np.random.Generator) -> None:
+        if not isinstance(config, TrackerConfig):
+            raise TrackingError(f"Tracker needs a TrackerConfig, got {type(config).__name__}")
+        if not isinstance(init, InitPlan):
+            raise TrackingError(f"Tracker needs an InitPlan, got {type(init).__name__}")
+        if not isinstance(rng, np.random.Generator):
+            raise TrackingError(f"Tracker needs a numpy.random.Generator, got {type(rng).__name__}")
+        self.config = config
+        self.init = init
+        self.rng = rng
+        self.cues = [CUES[name](config.cue_config(name)) for name in config.cues]
+        self.background = BackgroundModel(config.background) if config.uses_background else None
+        self.targets: list[_Target] = []
+        self._fusion: CueFusion | None = None
+        self._fusion_config = config.fusion_config()
+        self._motion: ConstantVelocity | None = None
+        self._image_shape: tuple[int, int] | None = None
+        self._last_frame = 0
+
+    # -- births and deaths --------------------------------------------------------------------
+    def add_target(self, target: TargetInit, image: np.ndarray, foreground: np.ndarray | None = None) -> Estimate:
+        """Start tracking ``target`` at its box in ``image`` (W-S1); returns its first estimate."""
+        if any(t.id == target.id for t in self.targets):
+            raise InitError(f"target {target.id} is already being tracked")
+        height, width = image.shape[:2]
+        InitPlan((target,), source=self.init.source).check_image(width, height)
+        x, y, w, h = target.box
+        centre = (x + w / 2.0, y + h / 2.0)
+        for cue in self.cues:
+            if isinstance(cue, AppearanceCue):
+                cue.add_target(image, target.box, foreground)
+        states = initialise(centre, self.config.particles, self.rng, sigma_pos=self.config.init_sigma)
+        estimate = np.array([centre[0], centre[1], 0.0, 0.0, 0.0])
+        self.targets.append(_Target(target.id, target.last_frame, np.array([w, h]), ParticleSet(states), estimate))
+        self._fusion = None
+        return Estimate(self._last_frame, target.id, estimate.copy(), target.box)
+
+    def remove_target(self, target_id: int) -> None:
+        """Stop tracking ``target_id``; the cues forget its template."""
+        index = next((k for k, t in enumerate(self.targets) if t.id == target_id), None)
+        if index is None:
+            raise TrackingError(f"no live target {target_id!r} to remove")
+        for cue in self.cues:
+            if isinstance(cue, AppearanceCue):
+                cue.remove_target(index)
+        del self.targets[index]
+        self._fusion = None
+
+    # -- one frame ----------------------------------------------------------------------------
+    def step(self, frame: int, image: np.ndarray) -> list[Estimate]:
+        """Process 1-based ``frame``: deaths, W-S2..S5 for the live targets, then births.
+
+        Parameters
+        ----------
+        frame : int
+            1-based frame number, increasing by one per call.
+        image : ndarray of uint8, shape (H, W, 3)
+            The BGR frame.
+
+        Returns
+        -------
+        list of Estimate
+            One per target alive at this frame, in the tracker's target order.
+        """
+        image = np.asarray(image)
+        if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8 or 0 in image.shape:
+            raise TrackingError(f"frames must be (H, W, 3) uint8 arrays, got shape {image.shape} dtype {image.dtype}")
+        if self._image_shape is None:
+            self._image_shape = image.shape[:2]
+            height, width = self._image_shape
+            self._motion = ConstantVelocity(self.config.motion, bounds=(width, height))
+        elif image.shape[:2] != self._image_shape:
+            raise TrackingError(f"frame {frame} has size {image.shape[:2]}, the first had {self._image_shape}")
+        self._last_frame = frame
+        for target in [t for t in self.targets if t.last_frame is not None and t.last_frame < frame]:
+            self.remove_target(target.id)
+        foreground = self.background.apply(image) if self.background is not None else None
+        estimates = self._filter(frame, image, foreground) if self.targets else []
+        for target in self.init.births(frame):
+            born = self.add_target(target, image, foreground)
+            estimates.append(born)
+        return estimates
+
+    def _filter(self, frame: int, image: np.ndarray, foreground: np.ndarray | None) -> list[Estimate]:
+        config = self.config
+        tau = len(self.targets)
+        # W-S2: propagate.  The t − 1 particles (after resampling) give d_max (W (23)).
+        previous = np.concatenate([t.particles.states[:, [CX, CY]] for t in self.targets])
+        moved = [t.particles.propagate(self._motion, self.rng) for t in self.targets]
+        counts = np.array([len(p) for p in moved])
+        states = np.concatenate([p.states for p in moved])                              # (P, 5)
+        owner = np.repeat(np.arange(tau), counts)                                       # (P,)
+        obs = Observation(image, foreground,
+                          centres=np.array([t.estimate[[CX, CY]] for t in self.targets]),
+                          sizes=np.array([t.size for t in self.targets]),
+                          previous_particles=previous)
+        # W-S3: every cue scores every particle against θ_1..θ_τ, FA; fusion weighs them.
+        scores = [cue.log_likelihoods(obs, states, owner) for cue in self.cues]
+        if self._fusion is None or self._fusion.n_targets != tau:
+            self._fusion = CueFusion(tau, self._fusion_config)
+        result = self._fusion.fuse(scores, owner)
+        weights = np.nan_to_num(np.asarray(result.weights, dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0)
+        weights = np.maximum(weights, 0.0)
+        with np.errstate(divide="ignore"):
+            log_weights = np.log(weights)                                                # 0 → -inf
+        bel = result.weights if config.weight == "bel" else \
+            result.fused.bel(list(self._fusion.targets))[np.arange(owner.size), owner]
+        r = self._inconsistency(scores)
+        per_target = {
+            "mean_m_target": _means(result.singleton_mass, owner, counts),
+            "mean_m_intersection": _means(result.intersection_mass, owner, counts),
+            "mean_bel": _means(bel, owner, counts),
+            "mean_m_empty": _means(result.empty_mass, owner, counts),
+            "mean_r": _means(r, owner, counts),
+        }
+        n_next = config.particles
+        if config.adaptive:
+            n_next = adaptive_count(float(np.clip(r.mean(), 0.0, 1.0)), math.ceil(config.particles / 2),
+                                    config.particles)
+        estimates = []
+        starts = np.concatenate([[0], np.cumsum(counts)])
+        for j, (target, particles) in enumerate(zip(self.targets, moved)):
+            weighted = particles.reweight(log_weights[starts[j]:starts[j + 1]])          # normalised in the set
+            state = weighted.estimate()                                                  # W-S4, W (6)
+            diagnostics = {name: float(values[j]) for name, values in per_target.items()}
+            diagnostics["particles"] = float(len(weighted))
+            diagnostics["ess"] = weighted.ess()
+            target.particles = weighted.resample(self.rng, method=config.resampling,     # W-S5
+                                                 threshold=config.ess_threshold,
+                                                 n=n_next if config.adaptive else None)
+            target.estimate = state
+            estimates.append(Estimate(frame, target.id, state.copy(), self._box(target, state), diagnostics))
+        return estimates
+
+    def _inconsistency(self, scores: list[np.ndarray]) -> np.ndarray:
+        """R (W (10)) between the first two cues' masses, per particle; zeros with one cue."""
+        if len(scores) < 2:
+            return np.zeros(scores[0].shape[0])
+        return inconsistency(cue_masses(scores[0]), cue_masses(scores[1]), self._fusion.focal,
+                             self._fusion.model, self.config.r_mode)
+
+    @staticmethod
+    def _box(target: _Target, state: np.ndarray) -> tuple[float, float, float, float]:
+        w, h = target.size * math.exp(float(np.clip(state[LOG_SCALE], -30.0, 30.0)))
+        return (float(state[CX] - w / 2.0), float(state[CY] - h / 2.0), float(w), float(h))
+
+
+def _means(values: np.ndarray, owner: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Per-target unweighted means of per-particle ``values`` (W (33)–(35)), shape (τ,)."""
+    return np.bincount(owner, weights=np.asarray(values, dtype=np.float64), minlength=counts.size) / counts
+
+
+# -- a whole run ----------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Summary:
+    """What a :func:`run` did.
+
+    Attributes
+    ----------
+    frames : int
+        Frames processed.
+    tracking_fps : float
+        Frames per second of the tracker alone (decoding and output excluded).
+    overall_fps : float
+        Frames per second of the whole run (decoding and writing included).
+    tracks : ndarray, shape (M, 10)
+        The rows of ``tracks.txt``.
+    scores : Scores or None
+        The evaluation against the ground truth, when it is known.
+    files : dict of str to Path
+        The output files by name.
+    """
+
+    frames: int
+    tracking_fps: float
+    overall_fps: float
+    tracks: np.ndarray
+    scores: object | None
+    files: dict
+
+    def to_dict(self) -> dict:
+        """The JSON-ready part (no arrays)."""
+        return {"frames": self.frames, "tracking_fps": self.tracking_fps, "overall_fps": self.overall_fps,
+                "scores": None if self.scores is None else self.scores.to_dict(),
+                "files": {k: str(v) for k, v in self.files.items()}}
+
+
+def run(source, init: InitPlan, config: TrackerConfig = TrackerConfig(), out_dir: str | PathLike[str] = "track",
+        seed: int = 0, write_video: bool = True, progress: bool = True, gt: np.ndarray | str | None = None,
+        extra_outputs: dict | None = None) -> Summary:
+    """Track ``source`` and write the outputs into ``out_dir``.
+
+    Parameters
+    ----------
+    source : path, Scene or ndarray of uint8, shape (T, H, W, 3)
+        A video file (decoded with OpenCV), a rendered synthetic scene, or frames.
+    init : InitPlan
+        Births and deaths of the targets (:func:`init_from_gt`, :func:`read_init_boxes`).
+    config : TrackerConfig
+    out_dir : path
+        Receives ``tracks.txt``, ``diagnostics.csv``, ``diagnostics.png``, ``annotated.avi``
+        (unless ``write_video`` is false) and ``summary.json``, written last.
+    seed : int
+        Seed of the run's only random generator.
+    progress : bool
+        Show a progress bar on standard error (only when it is a terminal).
+    gt : ndarray or path, optional
+        Ground truth to score the tracks against (:func:`~plugins.video_tracking.evaluation.evaluate`).
+    extra_outputs : dict of str to callable, optional
+        Further files ``name -> write(path)``, committed with the others.
+
+    Returns
+    -------
+    Summary
+
+    Raises
+    ------
+    TrackingError
+        Unreadable video (:class:`VideoError`), boxes outside the image (:class:`InitError`), …
+        On any error the staged files are deleted: nothing that looks complete is left.
+    """
+    import sys
+    import time
+
+    from belief import __version__
+    from plugins.video_tracking import outputs
+    from plugins.video_tracking.evaluation import evaluate
+    from plugins.video_tracking.video import AnnotatedVideoWriter, VideoReader
+
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise TrackingError(f"the seed must be a non-negative integer, got {seed!r}")
+    if not isinstance(init, InitPlan):
+        raise TrackingError(f"init must be an InitPlan, got {type(init).__name__}")
+    if not isinstance(config, TrackerConfig):
+        raise TrackingError(f"config must be a TrackerConfig, got {type(config).__name__}")
+    started = time.perf_counter()
+    reader = None
+    if isinstance(source, (str, PathLike)):
+        reader = VideoReader(source)
+        frames, fps, total = reader, reader.fps, reader.frame_count
+        width, height, source_name = reader.width, reader.height, str(source)
+    else:
+        frames = getattr(source, "frames", source)
+        frames = np.asarray(frames)
+        if frames.ndim != 4 or frames.shape[3] != 3 or frames.dtype != np.uint8 or 0 in frames.shape:
+            raise TrackingError(f"frames must be a (T, H, W, 3) uint8 array, got shape {frames.shape}")
+        height, width = frames.shape[1:3]
+        fps, total = 25.0, frames.shape[0]
+        config_of_scene = getattr(source, "config", None)
+        source_name = f"scene {config_of_scene.name!r}" if config_of_scene is not None else "frames"
+    gt_rows = None
+    if gt is not None:
+        gt_rows = read_mot(gt) if isinstance(gt, (str, PathLike)) else np.asarray(gt, dtype=np.float64)
+    try:
+        init.check_image(width, height)
+        staged = outputs.StagedOutputs(out_dir)
+    except BaseException:
+        if reader is not None:
+            reader.close()
+        raise
+    try:
+        rng = np.random.default_rng(int(seed))
+        tracker = Tracker(config, init, rng)
+        writer = AnnotatedVideoWriter(staged.path("annotated.avi"), fps) if write_video else None
+        rows: list[list[float]] = []
+        records: list[dict[str, float]] = []
+        tracking_seconds = 0.0
+        count = 0
+        from tqdm import tqdm
+
+        bar = tqdm(total=total, unit="frame", desc="tracking", file=sys.stderr, leave=False,
+                   disable=not progress or not sys.stderr.isatty())
+        try:
+            for index, image in enumerate(frames):
+                frame = index + 1
+                tick = time.perf_counter()
+                estimates = tracker.step(frame, image)
+                tracking_seconds += time.perf_counter() - tick
+                for estimate in estimates:
+                    row = estimate.mot_row()
+                    if not np.isfinite(row).all():
+                        raise TrackingError(f"frame {frame}: target {estimate.id} has a non-finite estimate")
+                    rows.append(row)
+                    if estimate.diagnostics is not None:
+                        records.append({"frame": frame, "id": estimate.id, **estimate.diagnostics})
+                if writer is not None:
+                    writer.write(image, frame, [(e.id, e.box) for e in estimates])
+                count += 1
+                bar.update(1)
+        finally:
+            bar.close()
+            if writer is not None:
+                writer.close()
+        if count == 0:
+            raise TrackingError(f"{source_name}: no frame to track")
+        tracks = np.array(rows, dtype=np.float64).reshape(-1, 10)
+        outputs.write_tracks(staged.path("tracks.txt"), rows)
+        outputs.write_diagnostics(staged.path("diagnostics.csv"), records)
+        outputs.plot_diagnostics(staged.path("diagnostics.png"), records,
+                                 title=f"{source_name}: rule {config.rule}, weight {config.weight}")
+        for name, write in (extra_outputs or {}).items():
+            write(staged.path(name))
+        scores = evaluate(gt_rows, tracks) if gt_rows is not None else None
+        overall = time.perf_counter() - started
+        tracking_fps = count / tracking_seconds if tracking_seconds > 0 else float("inf")
+        overall_fps = count / overall if overall > 0 else float("inf")
+        from dataclasses import asdict
+
+        summary = {
+            "source": source_name,
+            "frames": count,
+            "targets": len(init.targets),
+            "track_rows": len(rows),
+            "fps": {"tracking": tracking_fps, "overall": overall_fps,
+                    "decoding_seconds": reader.decode_seconds if reader is not None else 0.0,
+                    "tracking_seconds": tracking_seconds, "overall_seconds": overall},
+            "seed": int(seed),
+            "init": init.source,
+            "parameters": asdict(config),
+            "version": __version__,
+            "scores": scores.to_dict() if scores is not None else None,
+        }
+        outputs.write_summary(staged.path("summary.json"), summary)
+        files = staged.commit()
+    except BaseException:
+        staged.abort()
+        raise
+    finally:
+        if reader is not None:
+            reader.close()
+    return Summary(count, tracking_fps, overall_fps, tracks, scores, files)

@@ -1,0 +1,166 @@
+"""Video input and output with OpenCV, kept at the edge of the plugin.
+
+:class:`VideoReader` decodes a file frame by frame (BGR ``uint8`` arrays) and times the
+decoding, so a run can report its tracking speed without it; :class:`AnnotatedVideoWriter`
+draws the tracked boxes and ids on the frames and writes a Motion-JPEG ``.avi``.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator, Sequence
+from os import PathLike
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from plugins.video_tracking.errors import VideoError
+
+__all__ = ["VideoReader", "AnnotatedVideoWriter", "track_colour"]
+
+
+class VideoReader:
+    """Frames of a video file, decoded lazily.
+
+    The first frame is decoded on opening, so a missing, unreadable or empty file fails
+    at once with a one-line :class:`VideoError`, before any output is written.
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Attributes
+    ----------
+    width, height : int
+        Frame size in pixels.
+    fps : float
+        Frame rate stored in the file (25 if the file gives none).
+    frame_count : int or None
+        Number of frames the container announces (may be None or approximate).
+    decode_seconds : float
+        Time spent decoding so far.
+    """
+
+    def __init__(self, path: str | PathLike[str]) -> None:
+        self.path = str(path)
+        file = Path(path)
+        if not file.exists():
+            raise VideoError(f"cannot read video {self.path!r}: no such file")
+        if file.is_dir():
+            raise VideoError(f"cannot read video {self.path!r}: it is a directory")
+        self._capture = cv2.VideoCapture(self.path)
+        if not self._capture.isOpened():
+            raise VideoError(f"cannot read video {self.path!r}: OpenCV cannot open it (not a video, or an "
+                             "unsupported codec)")
+        self.decode_seconds = 0.0
+        first = self._read()
+        if first is None:
+            self.close()
+            raise VideoError(f"cannot read video {self.path!r}: no frame could be decoded")
+        self._first: np.ndarray | None = first
+        self.height, self.width = first.shape[:2]
+        fps = float(self._capture.get(cv2.CAP_PROP_FPS) or 0.0)
+        self.fps = fps if fps > 0 else 25.0
+        count = int(self._capture.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
+        self.frame_count = count if count > 0 else None
+
+    def _read(self) -> np.ndarray | None:
+        start = time.perf_counter()
+        ok, frame = self._capture.read()
+        self.decode_seconds += time.perf_counter() - start
+        if not ok or frame is None:
+            return None
+        if frame.ndim == 2:
+            frame = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
+        return np.ascontiguousarray(frame[:, :, :3], dtype=np.uint8)
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        if self._first is not None:
+            first, self._first = self._first, None
+            yield first
+        while True:
+            frame = self._read()
+            if frame is None:
+                return
+            if frame.shape[:2] != (self.height, self.width):
+                raise VideoError(f"{self.path}: a frame of size {frame.shape[1]}x{frame.shape[0]} in a "
+                                 f"{self.width}x{self.height} video")
+            yield frame
+
+    def close(self) -> None:
+        """Release the file."""
+        self._capture.release()
+
+    def __enter__(self) -> VideoReader:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def track_colour(track_id: int) -> tuple[int, int, int]:
+    """A distinct, stable BGR colour for a track id (golden-ratio hues).
+
+    Examples
+    --------
+    >>> track_colour(1) == track_colour(1), track_colour(1) != track_colour(2)
+    (True, True)
+    """
+    hue = int((track_id * 0.618033988749895 % 1.0) * 180)
+    pixel = cv2.cvtColor(np.array([[[hue, 220, 255]]], dtype=np.uint8), cv2.COLOR_HSV2BGR)[0, 0]
+    return int(pixel[0]), int(pixel[1]), int(pixel[2])
+
+
+class AnnotatedVideoWriter:
+    """Writes frames with the tracked boxes and ids drawn on them (Motion-JPEG ``.avi``).
+
+    Parameters
+    ----------
+    path : str or path-like
+        Output file; it should end in ``.avi``.
+    fps : float
+        Frame rate stored in the file.
+    """
+
+    def __init__(self, path: str | PathLike[str], fps: float = 25.0) -> None:
+        self.path = str(path)
+        self.fps = float(fps)
+        self._writer: cv2.VideoWriter | None = None
+        self._size: tuple[int, int] | None = None
+        self.frames = 0
+
+    def write(self, image: np.ndarray, frame: int, boxes: Sequence[tuple[int, Sequence[float]]]) -> None:
+        """Draw ``boxes`` — ``(id, (x, y, w, h))`` in 0-based pixels — on a copy of ``image`` and write it."""
+        canvas = np.array(image, dtype=np.uint8, copy=True)
+        height, width = canvas.shape[:2]
+        if self._writer is None:
+            self._writer = cv2.VideoWriter(self.path, cv2.VideoWriter_fourcc(*"MJPG"), self.fps, (width, height))
+            if not self._writer.isOpened():
+                raise VideoError(f"cannot write video {self.path!r}: OpenCV cannot open it for writing")
+            self._size = (height, width)
+        elif (height, width) != self._size:
+            raise VideoError(f"frame {frame} has size {width}x{height}, the video {self._size[1]}x{self._size[0]}")
+        for track_id, (x, y, w, h) in boxes:
+            colour = track_colour(track_id)
+            top_left = (int(round(x)), int(round(y)))
+            bottom_right = (int(round(x + w)) - 1, int(round(y + h)) - 1)
+            cv2.rectangle(canvas, top_left, bottom_right, colour, 1)
+            cv2.putText(canvas, str(track_id), (top_left[0], max(top_left[1] - 3, 10)), cv2.FONT_HERSHEY_SIMPLEX,
+                        0.4, colour, 1, cv2.LINE_AA)
+        cv2.putText(canvas, str(frame), (4, height - 6), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (255, 255, 255), 1,
+                    cv2.LINE_AA)
+        self._writer.write(canvas)
+        self.frames += 1
+
+    def close(self) -> None:
+        """Finish the file."""
+        if self._writer is not None:
+            self._writer.release()
+            self._writer = None
+
+    def __enter__(self) -> AnnotatedVideoWriter:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,118 @@
+"""``belief track``: the demo writes every output; bad input gives one line and a non-zero exit."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from belief.cli import main
+from plugins.video_tracking import scenes
+from plugins.video_tracking.cli import register
+from plugins.video_tracking.errors import TrackingError
+
+OUTPUTS = {"tracks.txt", "diagnostics.csv", "diagnostics.png", "summary.json", "annotated.avi", "gt.txt", "scene.avi"}
+DATA = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "pets09_s2l1_f0001_0200"
+
+
+def track(argv: list[str]) -> int:
+    """Run ``belief track`` through the plugin's own parser (works without the package installed)."""
+    parser = argparse.ArgumentParser(prog="belief")
+    register(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["track", *argv])
+    return args.func(args)
+
+
+def test_demo_writes_all_outputs(tmp_path, capsys):
+    out = tmp_path / "demo"
+    assert track(["--demo", "--out", str(out), "--seed", "2", "--particles", "30", "--no-progress"]) == 0
+    assert {p.name for p in out.iterdir()} == OUTPUTS
+    printed = capsys.readouterr().out
+    assert "MOTA" in printed and "IDF1" in printed and "ID switches" in printed
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["frames"] == 100 and summary["seed"] == 2 and summary["parameters"]["particles"] == 30
+    assert summary["parameters"]["cues"] == ["colour", "location", "foreground"]
+    assert summary["scores"]["mota"] is not None and summary["version"]
+    tracks = np.loadtxt(out / "tracks.txt", delimiter=",")
+    assert tracks.shape == (400, 10) and np.isfinite(tracks).all()
+    diagnostics = np.genfromtxt(out / "diagnostics.csv", delimiter=",", names=True)
+    assert len(diagnostics) == 4 * 99 and np.isfinite(diagnostics["mean_bel"]).all()
+
+
+def write_video(path: Path, n_frames: int = 4) -> Path:
+    frames = np.full((n_frames, 48, 64, 3), 100, np.uint8)
+    frames[:, 10:30, 20:30] = (40, 40, 190)
+    scenes.write_video(path, frames)
+    return path
+
+
+@pytest.mark.parametrize("case", ["missing video", "not a video", "box outside", "empty init", "unknown cue",
+                                  "unknown rule"])
+def test_bad_input_is_one_line_and_leaves_no_output(tmp_path, capsys, case):
+    video = write_video(tmp_path / "v.avi")
+    boxes = tmp_path / "boxes.csv"
+    boxes.write_text("1,21,11,10,20\n")
+    argv = [str(video), "--init", str(boxes)]
+    if case == "missing video":
+        argv[0] = str(tmp_path / "nope.avi")
+    elif case == "not a video":
+        junk = tmp_path / "junk.avi"
+        junk.write_text("this is not a video\n")
+        argv[0] = str(junk)
+    elif case == "box outside":
+        boxes.write_text("1,500,11,10,20\n")
+    elif case == "empty init":
+        boxes.write_text("")
+    elif case == "unknown cue":
+        argv += ["--cues", "colour,edges"]
+    else:
+        argv += ["--rule", "no_such_rule"]
+    out = tmp_path / "out"
+    status = main(["track", *argv, "--out", str(out), "--no-progress"])
+    err = capsys.readouterr().err
+    assert status == 1
+    assert err.startswith("belief: error:") and err.count("\n") == 1
+    assert not out.exists()
+    with pytest.raises(TrackingError):
+        track([*argv, "--out", str(out), "--no-progress"])
+
+
+def test_track_with_boxes_file(tmp_path):
+    video = write_video(tmp_path / "v.avi", n_frames=5)
+    boxes = tmp_path / "boxes.csv"
+    boxes.write_text("id,x,y,w,h\n3,21,11,10,20\n")
+    out = tmp_path / "out"
+    assert track([str(video), "--init", str(boxes), "--out", str(out), "--particles", "20", "--no-video",
+                  "--no-progress"]) == 0
+    assert {p.name for p in out.iterdir()} == {"tracks.txt", "diagnostics.csv", "diagnostics.png", "summary.json"}
+    tracks = np.loadtxt(out / "tracks.txt", delimiter=",")
+    assert tracks.shape == (5, 10) and set(tracks[:, 1]) == {3}
+
+
+@pytest.mark.data
+def test_pets_first_frames(tmp_path):
+    if not (DATA / "video.avi").exists():
+        pytest.skip("the PETS 2009 S2L1 data set is absent")
+    from plugins.video_tracking.evaluation import read_mot
+    from plugins.video_tracking.scenes import write_gt
+
+    gt = read_mot(DATA / "gt.txt")
+    short = tmp_path / "gt20.txt"
+    write_gt(short, gt[gt[:, 0] <= 20])
+    out = tmp_path / "pets"
+    # The tracker stops at the end of the video; births after frame 20 do not happen as the gt is cut.
+    from plugins.video_tracking.tracker import TrackerConfig, init_from_gt, run
+    from plugins.video_tracking.video import VideoReader
+
+    with VideoReader(DATA / "video.avi") as reader:
+        frames = np.stack([f for _, f in zip(range(20), reader)])
+    summary = run(frames, init_from_gt(short), TrackerConfig(particles=50), out, seed=0, write_video=False,
+                  progress=False, gt=short)
+    assert summary.frames == 20
+    tracks = np.loadtxt(out / "tracks.txt", delimiter=",")
+    assert len(tracks) > 0 and np.isfinite(tracks).all()
+    diagnostics = np.genfromtxt(out / "diagnostics.csv", delimiter=",", names=True)
+    assert all(np.isfinite(diagnostics[name]).all() for name in diagnostics.dtype.names)
