@@ -29,7 +29,7 @@ keeps its targets and the cue's templates in the same order.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from functools import lru_cache
 from typing import ClassVar, Protocol, runtime_checkable
 
@@ -107,6 +107,7 @@ class Observation:
     centres: np.ndarray
     sizes: np.ndarray
     previous_particles: np.ndarray
+    _bins: dict = field(default_factory=dict, init=False, repr=False)
 
     def __post_init__(self) -> None:
         image = _checked_image(self.image)
@@ -127,6 +128,12 @@ class Observation:
     def n_targets(self) -> int:
         """τ, the number of targets."""
         return self.centres.shape[0]
+
+    def colour_bins(self, bins: int) -> np.ndarray:
+        """:func:`colour_bins` of the image, computed once per frame however many cues ask."""
+        if bins not in self._bins:
+            self._bins[bins] = colour_bins(self.image, bins)
+        return self._bins[bins]
 
 
 def _checked_image(image) -> np.ndarray:
@@ -705,7 +712,7 @@ class ColourCue:
     def histograms(self, obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
         """The candidate histograms h of all particles' boxes, shape (P, B) (L (9)–(11))."""
         states, owner = _particles(obs, states, owner)
-        return self._candidate_histograms(obs, colour_bins(obs.image, self.config.bins), states, owner)
+        return self._candidate_histograms(obs, obs.colour_bins(self.config.bins), states, owner)
 
     def _candidate_histograms(self, obs: Observation, bin_image: np.ndarray, states: np.ndarray,
                               owner: np.ndarray) -> np.ndarray:
@@ -715,7 +722,7 @@ class ColourCue:
     def false_alarm_histogram(self, obs: Observation) -> np.ndarray:
         """q_FA of this frame, shape (B,) (W (18)); A_j = w_j · h_j from ``obs.sizes``."""
         self._check_targets(obs)
-        return self._false_alarm(obs, colour_bins(obs.image, self.config.bins))
+        return self._false_alarm(obs, obs.colour_bins(self.config.bins))
 
     def _false_alarm(self, obs: Observation, bin_image: np.ndarray) -> np.ndarray:
         scene = np.bincount(bin_image.ravel(), minlength=self.config.n_bins)     # kernel-free, whole frame
@@ -726,7 +733,7 @@ class ColourCue:
         """log p_1 … log p_τ, log p_FA = −(1 − ρ) / (2σ²) of every particle, shape (P, τ + 1) (W (16)–(19))."""
         states, owner = _particles(obs, states, owner)
         self._check_targets(obs)
-        bin_image = colour_bins(obs.image, self.config.bins)
+        bin_image = obs.colour_bins(self.config.bins)
         references = np.concatenate([self._templates, self._false_alarm(obs, bin_image)[None, :]])   # (τ + 1, B)
         rho = bhattacharyya(self._candidate_histograms(obs, bin_image, states, owner), references)
         return _log_gaussian(1.0 - rho, self.config.sigma)                          # d² = 1 − ρ (W (17))

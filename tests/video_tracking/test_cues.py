@@ -496,3 +496,17 @@ def test_background_model_rejects_frames_of_another_shape():
 def test_docstring_examples(module):
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0 and result.failed == 0
+
+
+def test_the_bin_image_of_a_frame_is_computed_once_for_every_cue(monkeypatch):
+    import plugins.video_tracking.cues as cues_module
+
+    calls = []
+    real = cues_module.colour_bins
+    monkeypatch.setattr(cues_module, "colour_bins", lambda image, bins: calls.append(bins) or real(image, bins))
+    image = np.full((40, 40, 3), 90, np.uint8)
+    obs = cues_module.Observation(image, np.ones((40, 40), bool), [[20.0, 20.0]], [[10.0, 10.0]], np.zeros((0, 2)))
+    first = obs.colour_bins(8)
+    assert obs.colour_bins(8) is first and calls == [8]
+    obs.colour_bins(4)
+    assert calls == [8, 4]

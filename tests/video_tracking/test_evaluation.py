@@ -109,13 +109,19 @@ def test_one_target_changing_hypothesis_id_halfway_is_one_switch():
     assert scores.mean_centre_error == 0.0
 
 
-def test_two_targets_swapping_identities_halfway_are_two_switches():
+def swapped_halfway():
+    """Two targets over frames 1-10 and hypotheses that swap their ids from frame 6 on."""
     frames = range(1, 11)
     gt = np.vstack([track(1, frames, 0, 0), track(2, frames, 300, 300)])
     hyp = gt.copy()
     hyp[:, 1] = np.where(gt[:, 1] == 1, 10, 20)
     second_half = gt[:, 0] > 5
     hyp[second_half, 1] = np.where(gt[second_half, 1] == 1, 20, 10)
+    return gt, hyp, second_half
+
+
+def test_two_targets_swapping_identities_halfway_are_two_switches():
+    gt, hyp, _ = swapped_halfway()
     scores = evaluate(gt, hyp)
     # Frame 6: object 1 goes to hypothesis 20 (was 10) and object 2 to 10 (was 20): both switch.
     assert scores.id_switches == 2
@@ -127,12 +133,7 @@ def test_two_targets_swapping_identities_halfway_are_two_switches():
 def test_centre_errors_count_each_switched_pair_once():
     # As above, but the second half of the hypotheses is off by (3, 4): 10 pairs at 0 px, 10 at 5 px.
     # (motmetrics also logs a switched pair as TRANSFER/ASCEND/MIGRATE events; those must not count.)
-    frames = range(1, 11)
-    gt = np.vstack([track(1, frames, 0, 0), track(2, frames, 300, 300)])
-    hyp = gt.copy()
-    hyp[:, 1] = np.where(gt[:, 1] == 1, 10, 20)
-    second_half = gt[:, 0] > 5
-    hyp[second_half, 1] = np.where(gt[second_half, 1] == 1, 20, 10)
+    gt, hyp, second_half = swapped_halfway()
     hyp[second_half, 2:4] += (3.0, 4.0)
     scores = evaluate(gt, hyp)
     assert scores.id_switches == 2 and scores.matched_pairs == 20
