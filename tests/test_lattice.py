@@ -291,3 +291,14 @@ def test_hasse_diagram_of_six_hypotheses_is_refused():
     lattice = hyper_power_set(6)
     with pytest.raises(LatticeTooLargeError, match="too large"):
         lattice.hasse_diagram()
+
+
+def test_lattices_and_graphs_beyond_the_limits_are_refused(monkeypatch):
+    import belief.lattice as lattice_module
+
+    monkeypatch.setattr(lattice_module, "MAX_ELEMENTS", 100)
+    with pytest.raises(LatticeTooLargeError, match="more than 100 elements"):
+        lattice_module.hyper_power_set(Model.hybrid(Frame.numbered(4), ["t1&t2&t3&t4"]))
+    monkeypatch.setattr(lattice_module, "MAX_GRAPH_NODES", 10)
+    with pytest.raises(LatticeTooLargeError, match="limit 10"):
+        lattice_module.hyper_power_set(3).hasse_diagram()

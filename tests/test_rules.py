@@ -918,3 +918,15 @@ def test_rules_without_the_keeps_conflict_flag_leave_nothing_on_empty():
     for rule in ("pcr5", "pcr6"):
         assert not RULES[rule].keeps_conflict
         assert combine(m1, m2, rule=rule, model=Model.shafer(T3)).empty_mass == 0.0
+
+
+def test_a_joint_combination_with_too_many_tuples_is_refused(monkeypatch):
+    import belief.rules as rules_module
+
+    monkeypatch.setattr(rules_module, "MAX_TUPLES", 9)
+    frame = Frame(["a", "b", "c"])
+    shafer = Model.shafer(frame)
+    m = MassFunction({"a": 0.5, "b": 0.3, "c": 0.2}, model=shafer)
+    with pytest.raises(InvalidMassError, match="27 tuples"):
+        combine(m, m, m, rule="pcr6")
+    assert combine(m, m, rule="pcr6").isclose(combine(m, m, rule="pcr5"))     # 9 tuples: at the limit
