@@ -785,9 +785,9 @@ def _r_pair_entries(rp: _RPlan, v1: np.ndarray, v2: np.ndarray, model: Model, r_
             weights[2][:, cols] = np.where(none, 1.0, weights[2][:, cols])
             sub_total = np.where(none, 1.0, sub_total)
         total[:, cols] = sub_total
-    share = k / total
-    share *= (1.0 - r)[:, None]
+    # (1 - R)·k·w/Σw, with the ratio taken first: w ≤ Σw, so a subnormal Σw cannot overflow k/Σw.
+    share = k * (1.0 - r)[:, None]
     entries[:, rp.pair_positions[0]] = r[:, None] * k                                    # W (14)
     for slot in range(3):
-        entries[:, rp.pair_positions[slot + 1]] = share * weights[slot]                  # W (12), (12′), (13)
+        entries[:, rp.pair_positions[slot + 1]] = share * (weights[slot] / total)        # W (12), (12′), (13)
     return entries

@@ -682,6 +682,19 @@ def test_r_rule_cue_order_matters_from_three_cues():
     assert math.fsum(forward.values) == pytest.approx(1.0, abs=1e-15)
 
 
+def test_r_rule_survives_a_subnormal_m0():
+    # θ1/θ2 conflict k = .25 with m0(θ1) = m0(θ2) = 5e-321: (1 - R)·k is split by the ratio
+    # m0(θj) / Σ m0 = ½, which must not go through k / Σ m0 (that overflows to inf).
+    # R = √(½(.5 + .5)) = √½, so each target gets (1 - √½)·.25 / 2.
+    m1 = MassFunction({"t1": 0.5, "t2": 1e-320, "FA": 0.5}, model=TRACK2)
+    m2 = MassFunction({"t1": 1e-320, "t2": 0.5, "FA": 0.5}, model=TRACK2)
+    result = combine(m1, m2, rule="r_rule")
+    assert all(math.isfinite(v) for v in result.values)
+    assert result["t1"] == pytest.approx((1 - math.sqrt(0.5)) * 0.125, abs=1e-15)
+    assert result["t2"] == pytest.approx((1 - math.sqrt(0.5)) * 0.125, abs=1e-15)
+    assert math.fsum(result.values) == pytest.approx(1.0, abs=1e-15)
+
+
 # -- error paths ---------------------------------------------------------------------------------------------------
 
 
