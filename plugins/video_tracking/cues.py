@@ -59,7 +59,10 @@ __all__ = [
 ]
 
 #: How the location cue measures "away from the targets" for FA (SPEC B.3, W (24)).
-LOCATION_FA_MODES = ("centroid", "nearest")
+LOCATION_FA_MODES = ("centroid", "nearest", "gate")
+
+#: What a target's location Gaussian is centred on (:class:`LocationConfig`).
+LOCATION_REFERENCES = ("previous", "predicted")
 
 #: How the false-alarm colour histogram removes the target colours from the scene (W (18)).
 FA_HISTOGRAMS = ("subtract", "counts")
@@ -251,17 +254,30 @@ class LocationConfig:
     ----------
     sigma : float
         σ_loc in pixels of the Gaussians of W (22) and W (23) (SPEC default 10 px).
-    fa_mode : {"centroid", "nearest"}
-        FA distance to the centroid of the τ previous centres (W (24) generalised), or to the
-        nearest previous centre; d_max is measured the same way.
+    fa_mode : {"centroid", "nearest", "gate"}
+        FA distance to the centroid of the τ centres (W (24) generalised), or to the nearest
+        centre, with d_max measured the same way over the particles of t − 1; or ``"gate"``:
+        distance to the nearest centre with a fixed d_max = ``gate`` · σ, so that FA is
+        unlikely near every target and certain beyond the gate, however the targets spread
+        over the image.
+    gate : float
+        d_max in units of σ for ``fa_mode="gate"``.
+    reference : {"previous", "predicted"}
+        Centre each target's Gaussian on its estimate at t − 1 (W (22)), or on the estimate
+        moved on by its estimated velocity (x̂ + v̂·dt), so that the cue does not pull a moving
+        target back.  The tracker supplies the centres.
     """
 
     sigma: float = 10.0
     fa_mode: str = "centroid"
+    gate: float = 3.0
+    reference: str = "previous"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "sigma", _positive("LocationConfig", "sigma", self.sigma))
+        object.__setattr__(self, "gate", _positive("LocationConfig", "gate", self.gate))
         _choice("LocationConfig", "fa_mode", self.fa_mode, LOCATION_FA_MODES)
+        _choice("LocationConfig", "reference", self.reference, LOCATION_REFERENCES)
 
 
 class LocationCue:
@@ -317,10 +333,13 @@ class LocationCue:
         target_sq = _squared_distances(positions, obs.centres)                      # (P, τ)
         scores[:, :tau] = _log_gaussian(target_sq, self.config.sigma)
         distance = self._fa_distance(positions, obs.centres, target_sq)            # (P,)
-        previous = self._fa_distance(obs.previous_particles, obs.centres)          # (Q,)
-        # A circle thinner than σ would make FA jump from 0 to its maximum within a few
-        # pixels of the targets; the floor keeps it as smooth as the target Gaussians.
-        d_max = max(float(previous.max(initial=0.0)), self.config.sigma)
+        if self.config.fa_mode == "gate":
+            d_max = self.config.gate * self.config.sigma
+        else:
+            previous = self._fa_distance(obs.previous_particles, obs.centres)      # (Q,)
+            # A circle thinner than σ would make FA jump from 0 to its maximum within a few
+            # pixels of the targets; the floor keeps it as smooth as the target Gaussians.
+            d_max = max(float(previous.max(initial=0.0)), self.config.sigma)
         gap = np.maximum(d_max - distance, 0.0)                                    # W (23) clamp
         scores[:, tau] = _log_gaussian(gap ** 2, self.config.sigma)
         return scores
@@ -830,7 +849,7 @@ def make_cue(name: str, **options) -> Cue:
     Examples
     --------
     >>> make_cue("location", sigma=5.0)
-    LocationCue(LocationConfig(sigma=5.0, fa_mode='centroid'))
+    LocationCue(LocationConfig(sigma=5.0, fa_mode='centroid', gate=3.0, reference='previous'))
     >>> make_cue("edges")
     Traceback (most recent call last):
     ...

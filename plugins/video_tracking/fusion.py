@@ -20,10 +20,13 @@ from belief import MassBatch, Model, combine
 from belief.errors import InvalidMassError
 from belief.rules import get_rule
 
-__all__ = ["FusionConfig", "CueFusion", "FusionResult", "cue_masses", "WEIGHTS"]
+__all__ = ["FusionConfig", "CueFusion", "FusionResult", "cue_masses", "relative_likelihoods", "WEIGHTS", "MASSES"]
 
 #: How a fused mass function becomes a particle weight.
 WEIGHTS = ("bel", "pls", "betp")
+
+#: How a cue's likelihoods become its mass function (:func:`cue_masses`).
+MASSES = ("relative", "absolute", "normalised")
 
 
 @dataclass(frozen=True)
@@ -38,17 +41,26 @@ class FusionConfig:
         The measure of θ_J that weights a particle of target J (W (32): Bel).
     r_mode, empty_mode : str
         Options of the R-weighted rule (ignored by the other rules).
+    masses : {"relative", "absolute", "normalised"}
+        How each cue's likelihoods become its mass function: ``"absolute"`` keeps the
+        likelihoods and puts the unexplained rest on FA (:func:`cue_masses`);
+        ``"relative"`` (default) does the same with relative likelihoods, each divided by the
+        best own-target likelihood in the particle's set (:func:`relative_likelihoods`);
+        ``"normalised"`` is W (20)–(21) literally.
     """
 
     rule: str = "r_rule"
     weight: str = "bel"
     r_mode: str = "paper"
     empty_mode: str = "union"
+    masses: str = "relative"
 
     def __post_init__(self) -> None:
         get_rule(self.rule)  # raises UnknownRuleError listing the known rules
         if self.weight not in WEIGHTS:
             raise InvalidMassError(f"weight must be one of {', '.join(WEIGHTS)}, got {self.weight!r}")
+        if self.masses not in MASSES:
+            raise InvalidMassError(f"masses must be one of {', '.join(MASSES)}, got {self.masses!r}")
 
     @property
     def options(self) -> dict[str, str]:
@@ -57,39 +69,111 @@ class FusionConfig:
         return {}
 
 
-def cue_masses(log_likelihoods: np.ndarray) -> np.ndarray:
-    """Bayesian cue masses from log-likelihoods, row by row (W (20)–(21)).
+def cue_masses(log_likelihoods: np.ndarray, mode: str = "normalised") -> np.ndarray:
+    """Bayesian cue masses over θ_1 … θ_τ, FA from log-likelihoods, row by row.
 
-    m(θ_j) = p_j / (Σ_k p_k + p_FA), computed as a softmax: the largest log-likelihood is
-    subtracted first, so rows of tiny likelihoods keep their proportions.
+    ``"normalised"`` is W (20)–(21): m(θ_j) = p_j / (Σ_k p_k + p_FA), computed as a softmax
+    (the largest log-likelihood is subtracted first, so rows of tiny likelihoods keep their
+    proportions).
+
+    ``"absolute"`` keeps the likelihoods themselves.  The cue likelihoods are Gaussian
+    similarities p = G(d; σ) ∈ (0, 1] (W (16), (19), (22), (23)): p_j is the degree to which
+    the particle's window fits target j.  Where they sum to at most one,
+
+        m(θ_j) = p_j,        m(FA) = 1 − Σ_k p_k,
+
+    so FA, the complement of the targets in the exhaustive frame (SPEC Part D), receives its
+    own likelihood p_FA plus whatever support no target claims.  Where they sum to more than
+    one the row is normalised as in W (20)–(21), so both modes agree there.  A window that fits
+    no model well is thus evidence of a false alarm; with normalised masses a poor fit to
+    θ_J still gives m(θ_J) ≈ 1 as long as FA fits even worse, so every particle near its
+    target gets Bel(θ_J) ≈ 1 and the weights W (32) stop telling good particles from poor ones.
 
     Parameters
     ----------
     log_likelihoods : ndarray, shape (P, τ + 1)
         log p_1 … log p_τ, log p_FA for P particles; -inf is a likelihood of zero.
+    mode : {"normalised", "absolute"}
 
     Returns
     -------
     ndarray, shape (P, τ + 1)
-        Rows that sum to one.  A row of all -inf gets the uniform mass (total ignorance
-        between the singletons), never NaN.
+        Rows that sum to one.  A row of all -inf gets the uniform mass (normalised) or all
+        mass on FA (absolute), never NaN.
 
     Examples
     --------
     >>> cue_masses(np.array([[np.log(0.6), np.log(0.3), np.log(0.1)], [-700.0, -700.0, -np.inf]]))
     array([[0.6, 0.3, 0.1],
            [0.5, 0.5, 0. ]])
+    >>> cue_masses(np.log([[0.2, 0.05, 0.1], [0.9, 0.4, 0.1]]), "absolute").round(4)
+    array([[0.2   , 0.05  , 0.75  ],
+           [0.6429, 0.2857, 0.0714]])
     """
     values = np.asarray(log_likelihoods, dtype=np.float64)
     if values.ndim != 2 or values.shape[1] < 2:
         raise InvalidMassError(f"log-likelihoods must have shape (P, τ + 1), got {values.shape}")
     if np.isnan(values).any() or np.isposinf(values).any():
         raise InvalidMassError("log-likelihoods must not be NaN or +inf")
+    if mode not in MASSES:
+        raise InvalidMassError(f"mode must be one of {', '.join(MASSES)}, got {mode!r}")
     top = values.max(axis=1, keepdims=True)
     dead = ~np.isfinite(top[:, 0])
     shifted = np.exp(values - np.where(dead[:, None], 0.0, top))
     shifted[dead] = 1.0
-    return shifted / shifted.sum(axis=1, keepdims=True)
+    normalised = shifted / shifted.sum(axis=1, keepdims=True)
+    if mode == "normalised":
+        return normalised
+    if (values > 0).any():
+        raise InvalidMassError("absolute cue masses need likelihoods in [0, 1] (log-likelihoods ≤ 0)")
+    likelihoods = np.exp(values)
+    fits = likelihoods.sum(axis=1) <= 1.0
+    likelihoods[:, -1] = 1.0 - likelihoods[:, :-1].sum(axis=1)
+    return np.where(fits[:, None], likelihoods, normalised)
+
+
+def relative_likelihoods(log_likelihoods: np.ndarray, owner: np.ndarray) -> np.ndarray:
+    """Likelihoods relative to the best particle of each set: log p − max_{n ∈ set J} log p_J⁽ⁿ⁾.
+
+    The cue likelihoods G(d; σ) measure similarity on a scale that depends on the scene: a
+    walking person never matches the template of their first frame exactly, so even the best
+    window of a target may have p_J ≪ 1, and with :func:`cue_masses` ``"absolute"`` every
+    particle would then hand most of its mass to FA.  Dividing by the best own-target
+    likelihood in the set gives Shafer's relative likelihood L(x) / max L: the best particle
+    of target J fits θ_J with p = 1, the others in proportion, and a window that fits a
+    hypothesis better than that best particle is capped at 1.  A set whose every own-target
+    likelihood is zero is left as it is.
+
+    Parameters
+    ----------
+    log_likelihoods : ndarray, shape (P, τ + 1)
+        One cue's log p_1 … log p_τ, log p_FA.
+    owner : ndarray of int, shape (P,)
+        The target of each particle.
+
+    Returns
+    -------
+    ndarray, shape (P, τ + 1)
+        Relative log-likelihoods, all ≤ 0.
+
+    Examples
+    --------
+    >>> scores = np.log([[0.02, 0.01, 0.001], [0.01, 0.001, 0.001], [0.5, 0.2, 0.1]])
+    >>> np.exp(relative_likelihoods(scores, np.array([0, 0, 1]))).round(3)
+    array([[1.  , 0.5 , 0.05],
+           [0.5 , 0.05, 0.05],
+           [1.  , 1.  , 0.5 ]])
+    """
+    values = np.asarray(log_likelihoods, dtype=np.float64)
+    owner = np.asarray(owner, dtype=np.int64)
+    if values.shape[0] == 0:
+        return values.copy()
+    own = values[np.arange(owner.size), owner]
+    best = np.full(int(owner.max()) + 1, -np.inf)
+    np.maximum.at(best, owner, own)
+    shift = best[owner]
+    shift = np.where(np.isfinite(shift), shift, 0.0)
+    return np.minimum(values - shift[:, None], 0.0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -164,7 +248,7 @@ class CueFusion:
     --------
     The worked example of SPEC A.4 (two targets; location, then colour):
 
-    >>> fusion = CueFusion(2, FusionConfig(rule="r_rule"))
+    >>> fusion = CueFusion(2, FusionConfig(rule="r_rule", masses="normalised"))
     >>> location = np.log([[0.6, 0.3, 0.1]])
     >>> colour = np.log([[0.2, 0.7, 0.1]])
     >>> result = fusion.fuse([location, colour], owner=np.array([0]))
@@ -181,6 +265,21 @@ class CueFusion:
         self.focal = self.model.frame.singletons
         self.targets = self.focal[:n_targets]
 
+    def cue_masses(self, log_likelihoods: Sequence[np.ndarray], owner: np.ndarray) -> list[np.ndarray]:
+        """The cue mass functions of P particles, one (P, τ + 1) array per cue (``config.masses``)."""
+        owner = np.asarray(owner, dtype=np.int64)
+        shape = (owner.size, self.n_targets + 1)
+        masses = []
+        for k, scores in enumerate(log_likelihoods):
+            scores = np.asarray(scores, dtype=np.float64)
+            if scores.shape != shape:
+                raise InvalidMassError(f"cue {k + 1} gives shape {scores.shape}, expected {shape}")
+            if self.config.masses == "relative":
+                masses.append(cue_masses(relative_likelihoods(scores, owner), "absolute"))
+            else:
+                masses.append(cue_masses(scores, self.config.masses))
+        return masses
+
     def fuse(self, log_likelihoods: Sequence[np.ndarray], owner: np.ndarray) -> FusionResult:
         """Fuse c cues for P particles (W (7)) and weigh each particle (W (32)).
 
@@ -195,14 +294,10 @@ class CueFusion:
             raise InvalidMassError("fusion needs at least one cue")
         owner = np.asarray(owner, dtype=np.int64)
         shape = (owner.size, self.n_targets + 1)
-        batches = []
-        for k, scores in enumerate(log_likelihoods):
-            scores = np.asarray(scores, dtype=np.float64)
-            if scores.shape != shape:
-                raise InvalidMassError(f"cue {k + 1} gives shape {scores.shape}, expected {shape}")
-            batches.append(MassBatch._trusted(self.model, self.focal, cue_masses(scores), canonical=True))
         if owner.size and (owner.min() < 0 or owner.max() >= self.n_targets):
             raise InvalidMassError(f"particle owners must be target indices 0..{self.n_targets - 1}")
+        batches = [MassBatch._trusted(self.model, self.focal, values, canonical=True)
+                   for values in self.cue_masses(log_likelihoods, owner)]
         if len(batches) == 1:
             fused = batches[0]
         else:

@@ -44,11 +44,13 @@ from plugins.video_tracking.cues import (
 )
 from plugins.video_tracking.errors import InitError, TrackingError, UnknownCueError
 from plugins.video_tracking.evaluation import read_mot
-from plugins.video_tracking.fusion import WEIGHTS, CueFusion, FusionConfig, cue_masses
+from plugins.video_tracking.fusion import WEIGHTS, CueFusion, FusionConfig
 from plugins.video_tracking.particles import (
     CX,
     CY,
     LOG_SCALE,
+    VX,
+    VY,
     RESAMPLERS,
     ConstantVelocity,
     MotionConfig,
@@ -56,6 +58,7 @@ from plugins.video_tracking.particles import (
     adaptive_count,
     initialise,
 )
+from plugins.video_tracking.perspective import PerspectiveScale
 
 __all__ = [
     "TrackerConfig",
@@ -79,6 +82,10 @@ DIAGNOSTIC_COLUMNS = ("mean_m_target", "mean_m_intersection", "mean_bel", "mean_
                       "particles", "ess")
 
 
+#: Where window sizes come from (:attr:`TrackerConfig.scale`).
+SCALES = ("perspective", "state")
+
+
 # -- configuration --------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class TrackerConfig:
@@ -97,8 +104,16 @@ class TrackerConfig:
         The measure of θ_J that weighs a particle of target J (W (32)).
     r_mode, empty_mode : str
         Options of the R-weighted rule.
+    masses : {"relative", "absolute", "normalised"}
+        How a cue's likelihoods become its mass function (:class:`FusionConfig`);
+        ``"normalised"`` is W (20)–(21).
+    scale : {"perspective", "state"}
+        Where a window's size comes from: a ground-plane model of box height against the foot
+        row, fitted to the birth boxes seen so far
+        (:class:`~plugins.video_tracking.perspective.PerspectiveScale`; fixed size until two
+        boxes on different rows allow a fit), or the particles' own log-scale random walk.
     motion : MotionConfig
-        Noise of the constant-velocity model.
+        Noise of the constant-velocity model (default σ_pos = 3 px, σ_vel = 0.5 px/frame).
     resampling : str
         A resampler of :data:`plugins.video_tracking.particles.RESAMPLERS`.
     ess_threshold : float in [0, 1]
@@ -107,7 +122,8 @@ class TrackerConfig:
         Adapt N to the conflict (SPEC B.3): N_{t+1} = N_min + ⌈(N − N_min)·κ_t⌉ with
         N_min = ⌈N / 2⌉ and κ_t the mean R of the frame.
     location, colour, foreground : LocationConfig, ColourConfig, ColourConfig
-        Settings of the location, colour and foreground-masked colour cues.
+        Settings of the location, colour and foreground-masked colour cues (location default:
+        ``fa_mode="gate"``, ``reference="predicted"``).
     background : BackgroundConfig
         The background model of the foreground cue.
     init_sigma : float
@@ -135,11 +151,13 @@ class TrackerConfig:
     weight: str = "bel"
     r_mode: str = "paper"
     empty_mode: str = "union"
-    motion: MotionConfig = field(default_factory=MotionConfig)
+    masses: str = "relative"
+    scale: str = "perspective"
+    motion: MotionConfig = field(default_factory=lambda: MotionConfig(sigma_pos=3.0, sigma_vel=0.5))
     resampling: str = "systematic"
     ess_threshold: float = 1.0
     adaptive: bool = False
-    location: LocationConfig = field(default_factory=LocationConfig)
+    location: LocationConfig = field(default_factory=lambda: LocationConfig(fa_mode="gate", reference="predicted"))
     colour: ColourConfig = field(default_factory=ColourConfig)
     foreground: ColourConfig = field(default_factory=ColourConfig)
     background: BackgroundConfig = field(default_factory=BackgroundConfig)
@@ -167,6 +185,8 @@ class TrackerConfig:
             raise TrackingError(str(exc)) from None
         if self.weight not in WEIGHTS:
             raise TrackingError(f"TrackerConfig.weight must be one of {', '.join(WEIGHTS)}, got {self.weight!r}")
+        if self.scale not in SCALES:
+            raise TrackingError(f"TrackerConfig.scale must be one of {', '.join(SCALES)}, got {self.scale!r}")
         if self.resampling not in RESAMPLERS:
             raise TrackingError(f"unknown resampler {self.resampling!r}; known: {', '.join(sorted(RESAMPLERS))}")
         if not isinstance(self.ess_threshold, (int, float)) or not 0.0 <= self.ess_threshold <= 1.0:
@@ -182,7 +202,8 @@ class TrackerConfig:
     def fusion_config(self) -> FusionConfig:
         """The :class:`FusionConfig` of these settings (raises ``UnknownRuleError`` for a bad rule)."""
         get_rule(self.rule)
-        return FusionConfig(rule=self.rule, weight=self.weight, r_mode=self.r_mode, empty_mode=self.empty_mode)
+        return FusionConfig(rule=self.rule, weight=self.weight, r_mode=self.r_mode, empty_mode=self.empty_mode,
+                            masses=self.masses)
 
     def cue_config(self, name: str):
         """The settings object of cue ``name``."""
@@ -403,6 +424,7 @@ class _Target:
     size: np.ndarray          # (2,) base w, h
     particles: ParticleSet
     estimate: np.ndarray      # (5,) at t − 1
+    birth_cy: float = 0.0     # centre row of the birth box, the reference of the perspective scale
 
 
 class Tracker:
@@ -450,6 +472,8 @@ class Tracker:
         self._motion: ConstantVelocity | None = None
         self._image_shape: tuple[int, int] | None = None
         self._last_frame = 0
+        self._birth_boxes: list[tuple[float, float, float, float]] = []
+        self.perspective: PerspectiveScale | None = None
 
     # -- births and deaths --------------------------------------------------------------------
     def add_target(self, target: TargetInit, image: np.ndarray, foreground: np.ndarray | None = None) -> Estimate:
@@ -465,7 +489,11 @@ class Tracker:
                 cue.add_target(image, target.box, foreground)
         states = initialise(centre, self.config.particles, self.rng, sigma_pos=self.config.init_sigma)
         estimate = np.array([centre[0], centre[1], 0.0, 0.0, 0.0])
-        self.targets.append(_Target(target.id, target.last_frame, np.array([w, h]), ParticleSet(states), estimate))
+        self.targets.append(_Target(target.id, target.last_frame, np.array([w, h]), ParticleSet(states), estimate,
+                                    birth_cy=centre[1]))
+        if self.config.scale == "perspective":
+            self._birth_boxes.append(target.box)
+            self.perspective = PerspectiveScale.fit(self._birth_boxes)
         self._fusion = None
         return Estimate(self._last_frame, target.id, estimate.copy(), target.box)
 
@@ -521,11 +549,16 @@ class Tracker:
         # W-S2: propagate.  The t − 1 particles (after resampling) give d_max (W (23)).
         previous = np.concatenate([t.particles.states[:, [CX, CY]] for t in self.targets])
         moved = [t.particles.propagate(self._motion, self.rng) for t in self.targets]
+        if self.perspective is not None:
+            for k, (target, particles) in enumerate(zip(self.targets, moved)):
+                rescaled = particles.states.copy()
+                rescaled[:, LOG_SCALE] = self.perspective.log_scale(rescaled[:, CY], target.birth_cy)
+                moved[k] = ParticleSet(rescaled, particles.log_weights)
         counts = np.array([len(p) for p in moved])
         states = np.concatenate([p.states for p in moved])                              # (P, 5)
         owner = np.repeat(np.arange(tau), counts)                                       # (P,)
         obs = Observation(image, foreground,
-                          centres=np.array([t.estimate[[CX, CY]] for t in self.targets]),
+                          centres=self._location_centres(),
                           sizes=np.array([t.size for t in self.targets]),
                           previous_particles=previous)
         # W-S3: every cue scores every particle against θ_1..θ_τ, FA; fusion weighs them.
@@ -539,7 +572,7 @@ class Tracker:
             log_weights = np.log(weights)                                                # 0 → -inf
         bel = result.weights if config.weight == "bel" else \
             result.fused.bel(list(self._fusion.targets))[np.arange(owner.size), owner]
-        r = self._inconsistency(scores)
+        r = self._inconsistency(scores, owner)
         per_target = {
             "mean_m_target": _means(result.singleton_mass, owner, counts),
             "mean_m_intersection": _means(result.intersection_mass, owner, counts),
@@ -566,11 +599,19 @@ class Tracker:
             estimates.append(Estimate(frame, target.id, state.copy(), self._box(target, state), diagnostics))
         return estimates
 
-    def _inconsistency(self, scores: list[np.ndarray]) -> np.ndarray:
+    def _location_centres(self) -> np.ndarray:
+        """The t − 1 centres, moved on by their velocities if the location cue asks so, shape (τ, 2)."""
+        centres = np.array([t.estimate[[CX, CY]] for t in self.targets])
+        if self.config.location.reference == "predicted":
+            centres = centres + self.config.motion.dt * np.array([t.estimate[[VX, VY]] for t in self.targets])
+        return centres
+
+    def _inconsistency(self, scores: list[np.ndarray], owner: np.ndarray) -> np.ndarray:
         """R (W (10)) between the first two cues' masses, per particle; zeros with one cue."""
         if len(scores) < 2:
             return np.zeros(scores[0].shape[0])
-        return inconsistency(cue_masses(scores[0]), cue_masses(scores[1]), self._fusion.focal,
+        first, second = self._fusion.cue_masses(scores[:2], owner)
+        return inconsistency(first, second, self._fusion.focal,
                              self._fusion.model, self.config.r_mode)
 
     @staticmethod

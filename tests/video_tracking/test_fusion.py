@@ -46,16 +46,16 @@ def test_table_rule_weights_match_the_closed_forms(seed, targets, cues):
     fa = np.stack([m[:, -1] for m in masses])                          # (c, P)
     own = np.stack([m[np.arange(rows), owner] for m in masses])        # (c, P)
     p = np.prod(1 - fa, axis=0)
-    bel = CueFusion(targets, FusionConfig(rule="dsmc", weight="bel")).fuse(scores, owner)
+    bel = CueFusion(targets, FusionConfig(rule="dsmc", weight="bel", masses="normalised")).fuse(scores, owner)
     np.testing.assert_allclose(bel.weights, p - np.prod(1 - fa - own, axis=0), atol=1e-12)
-    pls = CueFusion(targets, FusionConfig(rule="dsmc", weight="pls")).fuse(scores, owner)
+    pls = CueFusion(targets, FusionConfig(rule="dsmc", weight="pls", masses="normalised")).fuse(scores, owner)
     np.testing.assert_allclose(pls.weights, p, atol=1e-12)
     np.testing.assert_allclose(bel.empty_mass, 1 - p - np.prod(fa, axis=0), atol=1e-12)
 
 
 def test_two_targets_two_cues_give_w27_to_w32():
     # W (27)-(32) with location (.6, .3, .1) and colour (.2, .7, .1): Bel(θ1) = .12 + .48, Bel(θ2) = .21 + .48.
-    fusion = CueFusion(2, FusionConfig(rule="dsmc"))
+    fusion = CueFusion(2, FusionConfig(rule="dsmc", masses="normalised"))
     location = np.log([[0.6, 0.3, 0.1], [0.6, 0.3, 0.1]])
     colour = np.log([[0.2, 0.7, 0.1], [0.2, 0.7, 0.1]])
     result = fusion.fuse([location, colour], owner=np.array([0, 1]))
@@ -67,7 +67,7 @@ def test_two_targets_two_cues_give_w27_to_w32():
 
 def test_r_rule_matches_the_worked_example_of_spec_a4():
     # SPEC A.4: Bel(θ1) = .5149, Bel(θ2) = .6609, m(θ1∩θ2) = .3036.
-    fusion = CueFusion(2)
+    fusion = CueFusion(2, FusionConfig(masses="normalised"))
     location = np.log([[0.6, 0.3, 0.1]] * 2)
     colour = np.log([[0.2, 0.7, 0.1]] * 2)
     result = fusion.fuse([location, colour], owner=np.array([0, 1]))
@@ -79,7 +79,7 @@ def test_rules_agree_with_combining_rows_one_by_one():
     from belief import MassFunction, combine
 
     rng = np.random.default_rng(3)
-    fusion = CueFusion(3, FusionConfig(rule="pcr6", weight="betp"))
+    fusion = CueFusion(3, FusionConfig(rule="pcr6", weight="betp", masses="normalised"))
     masses = [bayesian_rows(rng, 5, 4) for _ in range(3)]
     owner = np.array([0, 1, 2, 0, 1])
     result = fusion.fuse([np.log(m) for m in masses], owner)
@@ -90,7 +90,7 @@ def test_rules_agree_with_combining_rows_one_by_one():
 
 
 def test_a_single_cue_is_its_own_evidence():
-    fusion = CueFusion(2)
+    fusion = CueFusion(2, FusionConfig(masses="normalised"))
     result = fusion.fuse([np.log([[0.5, 0.3, 0.2]])], owner=np.array([1]))
     assert result.weights[0] == pytest.approx(0.3)
 
@@ -102,7 +102,7 @@ def test_configuration_errors_are_specific():
         FusionConfig(weight="mean")
     with pytest.raises(InvalidMassError):
         CueFusion(0)
-    fusion = CueFusion(2)
+    fusion = CueFusion(2, FusionConfig(masses="normalised"))
     with pytest.raises(InvalidMassError, match="shape"):
         fusion.fuse([np.zeros((3, 4))], owner=np.zeros(3, dtype=int))
     with pytest.raises(InvalidMassError, match="owners"):
