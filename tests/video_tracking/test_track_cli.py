@@ -116,3 +116,14 @@ def test_pets_first_frames(tmp_path):
     assert len(tracks) > 0 and np.isfinite(tracks).all()
     diagnostics = np.genfromtxt(out / "diagnostics.csv", delimiter=",", names=True)
     assert all(np.isfinite(diagnostics[name]).all() for name in diagnostics.dtype.names)
+
+
+def test_readme_main_command_runs_the_tracking_demo(tmp_path, capsys):
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    command = next(line for line in readme.splitlines() if line.startswith("pip install . && belief "))
+    argv = command.split("&& belief ", 1)[1].split()
+    assert argv[:2] == ["track", "--demo"]
+    out = tmp_path / "readme_run"
+    argv[argv.index("--out") + 1] = str(out)
+    assert track([*argv[1:], "--particles", "20", "--no-progress"]) == 0
+    assert {p.name for p in out.iterdir()} == OUTPUTS
