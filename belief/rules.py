@@ -712,10 +712,15 @@ def inconsistency(m1: np.ndarray, m2: np.ndarray, focal: Sequence[Element], mode
 
     ``paper``: R = sqrt(Σ_A |m1(A) - m2(A)| / 2) as printed; ``euclid``:
     sqrt(½ Σ_A (m1(A) - m2(A))²); ``jousselme``: sqrt(½ Δᵀ D Δ) with D_AB = C(A∩B)/C(A∪B).
+
+    ``paper`` gives exactly R = 1 when no element has mass in both rows (disjoint focal
+    sets, SPEC A.4), whatever the rounding of the sum: the rule is discontinuous where m0
+    vanishes, so a spurious (1 - R)·k of 1e-17 would change later folds.
     """
     delta = m1 - m2
     if r_mode == "paper":
         value = np.abs(delta).sum(axis=1) / 2.0
+        value[~(np.minimum(m1, m2) > 0).any(axis=1)] = 1.0
     elif r_mode == "euclid":
         value = 0.5 * (delta * delta).sum(axis=1)
     else:

@@ -4,6 +4,7 @@ import math
 from fractions import Fraction
 from itertools import product
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -23,7 +24,7 @@ from belief import (
     combine,
     sequential,
 )
-from belief.rules import get_rule, rule_names
+from belief.rules import get_rule, inconsistency, rule_names
 from tests.strategies import (
     FusionCase,
     ModelCase,
@@ -692,6 +693,22 @@ def test_r_rule_survives_a_subnormal_m0():
     assert all(math.isfinite(v) for v in result.values)
     assert result["t1"] == pytest.approx((1 - math.sqrt(0.5)) * 0.125, abs=1e-15)
     assert result["t2"] == pytest.approx((1 - math.sqrt(0.5)) * 0.125, abs=1e-15)
+    assert math.fsum(result.values) == pytest.approx(1.0, abs=1e-15)
+
+
+def test_r_rule_disjoint_sources_have_r_exactly_one():
+    # SPEC A.4: R = 1 iff the focal sets are disjoint.  The float sum .6 + .3 + .1 + .7 + .2 + .1 is
+    # 1.9999999999999998, which would leave (1 - R)·k ≈ 1e-17 on θ1 and θ2; a later fold would then
+    # see m0 > 0 where it is 0 and split its conflicts differently.
+    track5 = Model.for_targets(5)
+    m1 = MassFunction({"t1": 0.6, "t2": 0.3, "t3": 0.1}, model=track5)
+    m2 = MassFunction({"t4": 0.7, "t5": 0.2, "FA": 0.1}, model=track5)
+    batches = [m1.batch(), m2.batch()]
+    focal = sorted(set(m1.batch().focal) | set(m2.batch().focal), key=lambda e: e.sort_key)
+    aligned = [np.array([[dict(zip(b.focal, b.values[0])).get(e, 0.0) for e in focal]]) for b in batches]
+    assert inconsistency(aligned[0], aligned[1], focal, track5)[0] == 1.0
+    result = combine(m1, m2, rule="r_rule")
+    assert result["t1"] == result["t2"] == result["t3"] == 0.0
     assert math.fsum(result.values) == pytest.approx(1.0, abs=1e-15)
 
 
