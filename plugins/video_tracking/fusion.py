@@ -6,19 +6,27 @@ Each cue scores every particle against every hypothesis of the frame
 0/0); the c cue mass functions of all particles are combined at once with a rule of the
 :mod:`belief` registry, as batches under the tracking model; the weight of a particle of
 target J is then Bel(θ_J) (W (32)), or Pls(θ_J) or BetP(θ_J) on request.
+
+For the rules and cue counts of :func:`plugins.video_tracking.owner_fusion.supports` (the
+R-weighted rule, DSmC, the conjunctive rule and Dempster's rule) those measures come from
+closed forms over the targets, at O(c·τ) per particle (plus one O(τ²) pass per particle for
+each R-weighted fold but the last) instead of the O(τ³) focal elements that a general
+combination of three cues builds; the fused mass functions are then combined only if
+:attr:`FusionResult.fused` is read.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass, field
-from functools import cached_property
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from functools import cached_property, partial
 
 import numpy as np
 
 from belief import MassBatch, Model, combine
 from belief.errors import InvalidMassError
 from belief.rules import get_rule
+from plugins.video_tracking.owner_fusion import first_inconsistency, owner_measures, supports
 
 __all__ = ["FusionConfig", "CueFusion", "FusionResult", "cue_masses", "relative_likelihoods", "WEIGHTS", "MASSES"]
 
@@ -176,52 +184,103 @@ def relative_likelihoods(log_likelihoods: np.ndarray, owner: np.ndarray) -> np.n
     return np.minimum(values - shift[:, None], 0.0)
 
 
-@dataclass(frozen=True, eq=False)
 class FusionResult:
     """The fused evidence of P particles.
 
+    Parameters
+    ----------
+    fused : MassBatch or callable
+        The fused mass functions, or a function without arguments that combines them (then
+        :attr:`fused` is computed on first access only).
+    owner : ndarray of int, shape (P,)
+    weights : ndarray, shape (P,)
+    n_targets : int
+    measures : dict of str to ndarray, optional
+        Measures of θ_owner already known (keys ``bel``, ``pls``, ``betp``,
+        ``singleton_mass``, ``intersection_mass``, ``empty_mass``); the others are read off
+        :attr:`fused`.
+    inconsistency : callable, optional
+        Gives :attr:`inconsistency`; zeros by default.
+
     Attributes
     ----------
-    fused : MassBatch
-        One fused mass function per particle (P rows).
     owner : ndarray of int, shape (P,)
         The target of each particle.
     weights : ndarray, shape (P,)
         The measure of θ_owner of each particle (not normalised).
+    n_targets : int
+        τ.
     """
 
-    fused: MassBatch
-    owner: np.ndarray
-    weights: np.ndarray
-    n_targets: int = field(default=0)
+    def __init__(self, fused: MassBatch | Callable[[], MassBatch], owner: np.ndarray, weights: np.ndarray,
+                 n_targets: int = 0, *, measures: dict[str, np.ndarray] | None = None,
+                 inconsistency: Callable[[], np.ndarray] | None = None) -> None:
+        self._fused = fused
+        self.owner = owner
+        self.weights = weights
+        self.n_targets = n_targets
+        self._measures = {k: v for k, v in (measures or {}).items() if v is not None}
+        self._inconsistency = inconsistency
+
+    @cached_property
+    def fused(self) -> MassBatch:
+        """One fused mass function per particle (P rows), combined on first access if needed."""
+        return self._fused if isinstance(self._fused, MassBatch) else self._fused()
+
+    def _known(self, name: str):
+        return self._measures.get(name)
+
+    @cached_property
+    def bel(self) -> np.ndarray:
+        """Bel(θ_J) of every particle for its own target J, shape (P,) (W (32))."""
+        known = self._known("bel")
+        if known is not None:
+            return known
+        targets = list(self.fused.frame.singletons[:self.n_targets])
+        return self.fused.bel(targets)[np.arange(len(self.owner)), self.owner] if len(self.owner) else np.zeros(0)
 
     @cached_property
     def singleton_mass(self) -> np.ndarray:
-        """m(θ_J) of every particle for its own target J, shape (P,)."""
-        columns = _columns(self.fused, [self.fused.frame.singletons[j] for j in range(self.n_targets)])
-        return _pick(self.fused.values, columns, self.owner)
+        """m(θ_J) of every particle for its own target J, shape (P,) (W (33))."""
+        known = self._known("singleton_mass")
+        return known if known is not None else _singleton_mass(self.fused, self.owner, self.n_targets)
 
     @cached_property
     def intersection_mass(self) -> np.ndarray:
-        """Mass on intersections of θ_J with other targets (θ_J ∩ θ_k …), per particle, shape (P,)."""
-        frame = self.fused.frame
-        fa = len(frame) - 1
-        totals = np.zeros((len(self.owner), self.n_targets))
-        for col, element in enumerate(self.fused.focal):
-            if len(element.terms) != 1:
-                continue
-            term = element.terms[0]
-            if term >> fa & 1 or term.bit_count() < 2:
-                continue
-            for j in range(self.n_targets):
-                if term >> j & 1:
-                    totals[:, j] += self.fused.values[:, col]
-        return totals[np.arange(len(self.owner)), self.owner]
+        """Mass on intersections of θ_J with other targets (θ_J ∩ θ_k …), per particle, shape (P,) (W (34))."""
+        known = self._known("intersection_mass")
+        return known if known is not None else _intersection_mass(self.fused, self.owner, self.n_targets)
 
     @cached_property
     def empty_mass(self) -> np.ndarray:
         """m(∅) of every particle (conflict kept by the rule), shape (P,)."""
-        return self.fused.empty_mass
+        known = self._known("empty_mass")
+        return known if known is not None else self.fused.empty_mass
+
+    @cached_property
+    def inconsistency(self) -> np.ndarray:
+        """R (W (10)) of the first fold, between cues 1 and 2, per particle; zeros with one cue."""
+        return self._inconsistency() if self._inconsistency is not None else np.zeros(len(self.owner))
+
+
+def _singleton_mass(fused: MassBatch, owner: np.ndarray, n_targets: int) -> np.ndarray:
+    columns = _columns(fused, [fused.frame.singletons[j] for j in range(n_targets)])
+    return _pick(fused.values, columns, owner)
+
+
+def _intersection_mass(fused: MassBatch, owner: np.ndarray, n_targets: int) -> np.ndarray:
+    fa = len(fused.frame) - 1
+    totals = np.zeros((len(owner), n_targets))
+    for col, element in enumerate(fused.focal):
+        if len(element.terms) != 1:
+            continue
+        term = element.terms[0]
+        if term >> fa & 1 or term.bit_count() < 2:
+            continue
+        for j in range(n_targets):
+            if term >> j & 1:
+                totals[:, j] += fused.values[:, col]
+    return totals[np.arange(len(owner)), owner]
 
 
 def _columns(batch: MassBatch, elements) -> np.ndarray:
@@ -298,10 +357,44 @@ class CueFusion:
             raise InvalidMassError(f"particle owners must be target indices 0..{self.n_targets - 1}")
         batches = [MassBatch._trusted(self.model, self.focal, values, canonical=True)
                    for values in self.cue_masses(log_likelihoods, owner)]
-        if len(batches) == 1:
-            fused = batches[0]
+        masses = [b.values for b in batches]
+        config = self.config
+        weight = config.weight
+        rule = get_rule(config.rule).name
+        if len(masses) > 1:
+            def inconsistency() -> np.ndarray:
+                return first_inconsistency(masses[0], masses[1], config.r_mode)
         else:
-            fused = combine(*batches, rule=self.config.rule, **self.config.options)
-        measure = getattr(fused, self.config.weight)(list(self.targets))            # (P, τ)
-        weights = measure[np.arange(owner.size), owner] if owner.size else np.zeros(0)
-        return FusionResult(fused, owner, weights, self.n_targets)
+            inconsistency = None
+        if not supports(rule, len(masses), config.r_mode, betp=weight == "betp"):
+            fused = self._combine(batches)
+            measure = getattr(fused, weight)(list(self.targets))                    # (P, τ)
+            weights = measure[np.arange(owner.size), owner] if owner.size else np.zeros(0)
+            return FusionResult(fused, owner, weights, self.n_targets, inconsistency=inconsistency)
+        # Closed forms per particle; rows they leave open are combined in general.
+        fast = owner_measures(masses, owner, rule, r_mode=config.r_mode, empty_mode=config.empty_mode,
+                              betp=weight == "betp")
+        measures = {"bel": fast.bel, "pls": fast.pls, "betp": fast.betp, "singleton_mass": fast.singleton,
+                    "intersection_mass": fast.intersection, "empty_mass": fast.empty}
+        if fast.general.any():
+            rows = np.flatnonzero(fast.general)
+            part = FusionResult(self._combine([MassBatch._trusted(self.model, self.focal, m[rows], canonical=True)
+                                               for m in masses]), owner[rows], None, self.n_targets)
+            targets = list(self.targets)
+            for name in list(measures):
+                if measures[name] is None:
+                    continue
+                if name in WEIGHTS:
+                    values = getattr(part.fused, name)(targets)[np.arange(rows.size), owner[rows]]
+                else:
+                    values = getattr(part, name)
+                measures[name] = measures[name].copy()
+                measures[name][rows] = values
+        return FusionResult(partial(self._combine, batches), owner, measures[weight], self.n_targets,
+                            measures=measures, inconsistency=inconsistency)
+
+    def _combine(self, batches: list[MassBatch]) -> MassBatch:
+        """The general combination of the cue batches with the configured rule (W (7))."""
+        if len(batches) == 1:
+            return batches[0]
+        return combine(*batches, rule=self.config.rule, **self.config.options)
