@@ -352,7 +352,6 @@ class CueFusion:
         if not log_likelihoods:
             raise InvalidMassError("fusion needs at least one cue")
         owner = np.asarray(owner, dtype=np.int64)
-        shape = (owner.size, self.n_targets + 1)
         if owner.size and (owner.min() < 0 or owner.max() >= self.n_targets):
             raise InvalidMassError(f"particle owners must be target indices 0..{self.n_targets - 1}")
         batches = [MassBatch._trusted(self.model, self.focal, values, canonical=True)

@@ -33,7 +33,7 @@ from os import PathLike
 import numpy as np
 
 from belief.errors import BeliefError
-from belief.rules import get_rule, inconsistency
+from belief.rules import get_rule
 from plugins.video_tracking.background import BackgroundConfig, BackgroundModel
 from plugins.video_tracking.cues import (
     CUES,
@@ -570,9 +570,8 @@ class Tracker:
         weights = np.maximum(weights, 0.0)
         with np.errstate(divide="ignore"):
             log_weights = np.log(weights)                                                # 0 → -inf
-        bel = result.weights if config.weight == "bel" else \
-            result.fused.bel(list(self._fusion.targets))[np.arange(owner.size), owner]
-        r = self._inconsistency(scores, owner)
+        bel = result.bel
+        r = result.inconsistency
         per_target = {
             "mean_m_target": _means(result.singleton_mass, owner, counts),
             "mean_m_intersection": _means(result.intersection_mass, owner, counts),
@@ -605,14 +604,6 @@ class Tracker:
         if self.config.location.reference == "predicted":
             centres = centres + self.config.motion.dt * np.array([t.estimate[[VX, VY]] for t in self.targets])
         return centres
-
-    def _inconsistency(self, scores: list[np.ndarray], owner: np.ndarray) -> np.ndarray:
-        """R (W (10)) between the first two cues' masses, per particle; zeros with one cue."""
-        if len(scores) < 2:
-            return np.zeros(scores[0].shape[0])
-        first, second = self._fusion.cue_masses(scores[:2], owner)
-        return inconsistency(first, second, self._fusion.focal,
-                             self._fusion.model, self.config.r_mode)
 
     @staticmethod
     def _box(target: _Target, state: np.ndarray) -> tuple[float, float, float, float]:
