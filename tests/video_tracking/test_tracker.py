@@ -54,11 +54,11 @@ def test_crossing_with_full_occlusion_keeps_identities(crossing_scene, seed):
     scores = evaluate(crossing_scene.ground_truth, rows)
     assert scores.id_switches == 0
     assert scores.matched_pairs >= 0.6 * scores.num_objects
-    # After the occlusion no track has jumped to the other walker: at the last frame each
-    # track is either on its own walker or on neither.
+    # After the occlusion at least one walker is still followed, by its own track (the whole
+    # run has no ID switch, so a matched last box is on the right walker).
     last = int(crossing_scene.ground_truth[:, 0].max())
     final = evaluate(crossing_scene.ground_truth[crossing_scene.ground_truth[:, 0] == last], rows[rows[:, 0] == last])
-    assert final.matched_pairs >= 1 and final.id_switches == 0
+    assert final.matched_pairs >= 1
 
 
 def test_crossing_with_default_cues_has_no_id_switch(crossing_scene):

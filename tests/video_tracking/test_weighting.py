@@ -80,6 +80,8 @@ def test_gate_location_makes_false_alarm_unlikely_near_every_target_only():
     assert centroid[0, 2] == 0.0          # W (23) with the centroid calls a lone outer target FA
     with pytest.raises(TrackingError, match="reference"):
         LocationConfig(reference="ahead")
+    with pytest.raises(TrackingError, match="gate"):
+        LocationConfig(gate=0.0)
 
 
 def test_predicted_reference_centres_the_location_cue_ahead_of_a_moving_target():
@@ -89,13 +91,11 @@ def test_predicted_reference_centres_the_location_cue_ahead_of_a_moving_target()
     tracker.step(1, image)
     tracker.targets[0].estimate[2:4] = (4.0, -2.0)
     assert np.allclose(tracker._location_centres(), [[49.0, 38.0]])
-    previous = Tracker(TrackerConfig(particles=5, cues=("location",)), init_from_boxes([(40, 30, 10, 20)]),
-                       np.random.default_rng(0))
-    previous.step(1, image)
-    previous.targets[0].estimate[2:4] = (4.0, -2.0)
-    assert previous.config.location.reference == "predicted"          # the tracker's default
-    literal = TrackerConfig(location=LocationConfig()).location
-    assert literal.reference == "previous" and literal.fa_mode == "centroid"
+    literal = Tracker(TrackerConfig(particles=5, cues=("location",), location=LocationConfig()),
+                      init_from_boxes([(40, 30, 10, 20)]), np.random.default_rng(0))
+    literal.step(1, image)
+    literal.targets[0].estimate[2:4] = (4.0, -2.0)
+    assert np.allclose(literal._location_centres(), [[45.0, 40.0]])       # W (22): the previous estimate
 
 
 def test_perspective_fit_recovers_a_ground_plane_and_refuses_what_is_not_one():
@@ -131,3 +131,5 @@ def test_tracker_sizes_windows_by_perspective_once_two_rows_are_known():
     assert fixed.perspective is None
     with pytest.raises(TrackingError, match="scale must be one of"):
         TrackerConfig(scale="zoom")
+    with pytest.raises(TrackingError, match="masses must be one of"):
+        TrackerConfig(masses="odd")
