@@ -76,6 +76,9 @@ STATE_COLUMNS = 5  # cx, cy, vx, vy, log_scale
 #: Residuals of W (18) at most this fraction of the scene are rounding, not colours.
 RESIDUAL_TOLERANCE = 1e-12
 
+#: Particles whose histograms a colour cue builds at once (:meth:`ColourCue.log_likelihoods`).
+HISTOGRAM_BLOCK = 128
+
 #: Log-scales are clipped to ±this before exp (see :func:`_particle_sizes`).
 MAX_ABS_LOG_SCALE = 30.0
 
@@ -754,7 +757,14 @@ class ColourCue:
         self._check_targets(obs)
         bin_image = obs.colour_bins(self.config.bins)
         references = np.concatenate([self._templates, self._false_alarm(obs, bin_image)[None, :]])   # (τ + 1, B)
-        rho = bhattacharyya(self._candidate_histograms(obs, bin_image, states, owner), references)
+        rho = np.empty((states.shape[0], references.shape[0]))
+        # The dense (block, B) histograms of a block stay small enough for the allocator to
+        # reuse their memory; histograms of all P particles at once (megabytes) would be mapped
+        # and unmapped on every call, which costs more than building them.
+        for start in range(0, states.shape[0], HISTOGRAM_BLOCK):
+            block = slice(start, start + HISTOGRAM_BLOCK)
+            rho[block] = bhattacharyya(self._candidate_histograms(obs, bin_image, states[block], owner[block]),
+                                       references)
         return _log_gaussian(1.0 - rho, self.config.sigma)                          # d² = 1 − ρ (W (17))
 
     def _check_targets(self, obs: Observation) -> None:

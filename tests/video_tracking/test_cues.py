@@ -510,3 +510,21 @@ def test_the_bin_image_of_a_frame_is_computed_once_for_every_cue(monkeypatch):
     assert obs.colour_bins(8) is first and calls == [8]
     obs.colour_bins(4)
     assert calls == [8, 4]
+
+
+@pytest.mark.parametrize("cue_type", [ColourCue, ForegroundColourCue])
+def test_scores_of_many_particles_are_built_block_by_block_without_changing_them(cue_type):
+    from plugins.video_tracking.cues import HISTOGRAM_BLOCK, _log_gaussian, bhattacharyya
+
+    rng = np.random.default_rng(5)
+    image = rng.integers(0, 256, size=(80, 120, 3), dtype=np.uint8)
+    mask = rng.random((80, 120)) < 0.5
+    cue = cue_type(ColourConfig(samples=(6, 12)))
+    cue.set_templates(image, np.array([[10, 10, 12, 24], [60, 30, 14, 28]]), foreground=mask)
+    obs = Observation(image, mask, [[16.0, 22.0], [67.0, 44.0]], [[12.0, 24.0], [14.0, 28.0]], np.zeros((0, 2)))
+    n = 2 * HISTOGRAM_BLOCK + 7
+    states = np.column_stack([rng.uniform(0, 120, n), rng.uniform(0, 80, n), np.zeros((n, 2)), rng.normal(0, 0.1, n)])
+    owner = rng.integers(0, 2, n)
+    references = np.concatenate([cue.templates, cue.false_alarm_histogram(obs)[None, :]])
+    whole = _log_gaussian(1.0 - bhattacharyya(cue.histograms(obs, states, owner), references), cue.config.sigma)
+    assert np.allclose(cue.log_likelihoods(obs, states, owner), whole, rtol=0, atol=1e-12)
