@@ -1,17 +1,19 @@
-"""Image cues of the tracker: location, colour and foreground-masked colour (SPEC B.2–B.4, Part D).
+"""Image cues of the tracker: location, colour, foreground-masked colour and edges (SPEC B.2–B.5, Part D).
 
 Every cue scores all particles of all targets at once against every hypothesis of the frame
 {θ_1, …, θ_τ, FA} and returns *log*-likelihoods of shape ``(P, τ + 1)``, the last column
 being the false alarm FA.  :class:`plugins.video_tracking.fusion.CueFusion` turns each row
 into a Bayesian mass function (W (20)–(21)) and combines the cues.
 
-Three cues are provided, all registered in :data:`CUES` (see :func:`make_cue`):
+Four cues are provided, all registered in :data:`CUES` (see :func:`make_cue`):
 
 * ``"location"`` — :class:`LocationCue`, distance to the previous estimates (W (22)–(24));
 * ``"colour"`` — :class:`ColourCue`, Bhattacharyya similarity of kernel-weighted colour
   histograms to per-target templates and to a false-alarm histogram (W (16)–(19));
 * ``"foreground"`` — :class:`ForegroundColourCue`, the same histograms counting only the
-  foreground pixels of a background model (L (16)–(17)).
+  foreground pixels of a background model (L (16)–(17));
+* ``"edges"`` — :class:`EdgeCue`, the same similarity for histograms of oriented edges
+  (HOE), each pixel weighted by its gradient magnitude (C (8)–(10), SPEC B.5).
 
 Pixel geometry
 --------------
@@ -23,7 +25,8 @@ The box of particle p has size ``sizes[owner[p]] * exp(log_scale[p])``.
 Appearance cues hold one template per target.  A tracker sets them all at once with
 ``set_templates`` or lets targets be born and die with ``add_target`` / ``remove_target``;
 target j of every call to ``log_likelihoods`` is row j of the templates, so the tracker
-keeps its targets and the cue's templates in the same order.
+keeps its targets and the cue's templates in the same order.  A template update (SPEC B.5,
+C (16)) reads ``templates`` and ``initial_templates`` and writes with ``replace_template``.
 """
 
 from __future__ import annotations
@@ -46,10 +49,13 @@ __all__ = [
     "ColourConfig",
     "ColourCue",
     "ForegroundColourCue",
+    "EdgeConfig",
+    "EdgeCue",
     "CUES",
     "make_cue",
     "box_centres",
     "colour_bins",
+    "orientation_bins",
     "kernel_grid",
     "kernel_histograms",
     "bhattacharyya",
@@ -75,6 +81,9 @@ STATE_COLUMNS = 5  # cx, cy, vx, vy, log_scale
 
 #: Residuals of W (18) at most this fraction of the scene are rounding, not colours.
 RESIDUAL_TOLERANCE = 1e-12
+
+#: At most this many orientation bins (one per degree); a (P, B) array stays small.
+MAX_ORIENTATION_BINS = 360
 
 #: Particles whose histograms a colour cue builds at once (:meth:`ColourCue.log_likelihoods`).
 HISTOGRAM_BLOCK = 128
@@ -140,6 +149,14 @@ class Observation:
         if bins not in self._bins:
             self._bins[bins] = colour_bins(self.image, bins)
         return self._bins[bins]
+
+    def orientation_bins(self, bins: int, unsigned: bool = False,
+                         min_gradient: float = 10.0) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`orientation_bins` of the image (bins, weights), computed once per frame and setting."""
+        key = ("orientation", int(bins), bool(unsigned), float(min_gradient))
+        if key not in self._bins:
+            self._bins[key] = orientation_bins(self.image, bins, unsigned, min_gradient)
+        return self._bins[key]
 
 
 def _checked_image(image) -> np.ndarray:
@@ -225,6 +242,20 @@ class AppearanceCue(Cue, Protocol):
 
     def remove_target(self, index: int) -> None:
         """Forget target ``index``; the later targets move down by one."""
+        ...
+
+    @property
+    def templates(self) -> np.ndarray:
+        """The current templates, shape (τ, B)."""
+        ...
+
+    @property
+    def initial_templates(self) -> np.ndarray:
+        """The templates as they were built when their targets were set or added, shape (τ, B)."""
+        ...
+
+    def replace_template(self, index: int, histogram) -> None:
+        """Replace the current template of target ``index`` (normalised to sum 1)."""
         ...
 
 
@@ -409,6 +440,81 @@ def colour_bins(image: np.ndarray, bins: int) -> np.ndarray:
     return (red * bins + green) * bins + blue
 
 
+def orientation_bins(image: np.ndarray, bins: int = 16, unsigned: bool = False,
+                     min_gradient: float = 10.0) -> tuple[np.ndarray, np.ndarray]:
+    """The gradient-orientation bin and the edge weight of every pixel (the HOE of SPEC B.5).
+
+    The grey image 0.299 R + 0.587 G + 0.114 B is differentiated with the 3×3 Sobel kernels
+    (borders replicated), x to the right and y *down*; the orientation θ = atan2(g_y, g_x),
+    taken in [0, 2π) (in [0, π) when ``unsigned``, so that opposite gradients share a bin),
+    is cut into ``bins`` equal bins starting at 0, and the weight is the magnitude
+    g = √(g_x² + g_y²) where g ≥ ``min_gradient`` and 0 elsewhere.  A step of s grey levels
+    gives g = 4s on each side of it.
+
+    Parameters
+    ----------
+    image : ndarray of uint8, shape (H, W, 3)
+        BGR, as OpenCV reads it.
+    bins : int
+        Orientation bins over the full circle (over a half circle when ``unsigned``).
+    unsigned : bool
+        Fold θ and θ + π together.
+    min_gradient : float
+        Pixels with a weaker gradient get weight 0 (SPEC: 10).
+
+    Returns
+    -------
+    bin_image : ndarray of intp, shape (H, W)
+        Values in 0 … bins − 1.
+    weights : ndarray of float64, shape (H, W)
+        g, or 0 below ``min_gradient``.
+
+    Examples
+    --------
+    A dark left half and a bright right half (grey 200): the gradient points right,
+    θ = 0, bin 0, and the two columns beside the step get g = 4 · 200:
+
+    >>> image = np.zeros((3, 4, 3), np.uint8)
+    >>> image[:, 2:] = 200
+    >>> bin_image, weights = orientation_bins(image)
+    >>> weights
+    array([[  0., 800., 800.,   0.],
+           [  0., 800., 800.,   0.],
+           [  0., 800., 800.,   0.]])
+    >>> bin_image[weights > 0]
+    array([0, 0, 0, 0, 0, 0])
+
+    Mirrored, the gradient points left (θ = π, bin 8 of 16), which ``unsigned`` folds back
+    onto θ = 0; turned on its side, it points down (θ = π/2, bin 4):
+
+    >>> orientation_bins(image[:, ::-1])[0][weights > 0]
+    array([8, 8, 8, 8, 8, 8])
+    >>> orientation_bins(image[:, ::-1], unsigned=True)[0][weights > 0]
+    array([0, 0, 0, 0, 0, 0])
+    >>> orientation_bins(image.transpose(1, 0, 2))[0][weights.T > 0]
+    array([4, 4, 4, 4, 4, 4])
+    """
+    channels = image.astype(np.int64)
+    # Integer weights in thousandths: a grey pixel (B = G = R) keeps its exact value.
+    grey = (114 * channels[..., 0] + 587 * channels[..., 1] + 299 * channels[..., 2]) / 1000.0
+    padded = np.pad(grey, 1, mode="edge")
+    left, right = padded[:, :-2], padded[:, 2:]                                  # (H + 2, W)
+    across = right - left
+    gx = across[:-2] + 2.0 * across[1:-1] + across[2:]
+    smooth = left + 2.0 * padded[:, 1:-1] + right
+    gy = smooth[2:] - smooth[:-2]
+    magnitude = np.sqrt(gx * gx + gy * gy)                # np.hypot and np.mod are several times slower
+    period = np.pi if unsigned else 2.0 * np.pi
+    # In turns, the axis directions (±π/2, π, …) are exact multiples of 1/4, so they do not
+    # fall on the wrong side of a bin boundary by rounding.
+    turns = np.arctan2(gy, gx) / period                   # [−1/2, 1/2], or [−1, 1] when unsigned
+    turns += turns < 0                                    # [0, 1]
+    bin_image = (turns * bins).astype(np.intp)
+    bin_image[bin_image >= bins] = 0                      # one turn (θ = π unsigned, or −0 rounded) is 0
+    weights = np.where(magnitude >= min_gradient, magnitude, 0.0)
+    return bin_image, weights
+
+
 @lru_cache(maxsize=32)
 def kernel_grid(samples: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
     """The sample points of a box and their Epanechnikov weights (L (11), per-axis form).
@@ -455,17 +561,25 @@ def kernel_grid(samples: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def kernel_histograms(bin_image: np.ndarray, centres: np.ndarray, box_sizes: np.ndarray, n_bins: int,
-                      samples: tuple[int, int], foreground: np.ndarray | None = None) -> np.ndarray:
-    """Kernel-weighted histograms of P boxes at once (L (9)–(11); L (16)–(17) with a mask).
+                      samples: tuple[int, int], foreground: np.ndarray | None = None, *,
+                      pixel_weights: np.ndarray | None = None) -> np.ndarray:
+    """Kernel-weighted histograms of P boxes at once (L (9)–(11); L (16)–(17) with a mask; C (8)).
 
-    q(u) = f Σ_i k(r_i) δ[h(x_i) − u] ξ(x_i) with f = 1 / Σ_i k(r_i) (L (10)), over the
-    sample points x_i of :func:`kernel_grid` placed in each box; ξ ≡ 1 without a mask.
+    q(u) = f Σ_i k(r_i) g(x_i) δ[h(x_i) − u] ξ(x_i) with f = 1 / Σ_i k(r_i) g(x_i) (L (10)),
+    over the sample points x_i of :func:`kernel_grid` placed in each box; ξ ≡ 1 without a
+    mask and g ≡ 1 without pixel weights, which gives the plain f = 1 / Σ_i k(r_i).
 
     Sample points outside the image are moved to the nearest border pixel, so a box leaving
-    the frame keeps a full histogram of the border colours.  With a mask they count as
-    background instead (ξ = 0): nothing outside the frame is foreground, and keeping them in
-    f is what lowers the score of a box that leaves the frame.  The mask never enters f:
-    Σ_u q(u) = F, the kernel-weighted foreground fraction of the box, ≤ 1 (SPEC B.4).
+    the frame keeps a full histogram of the border colours (and of the border pixel weights).
+    With a mask they count as background instead (ξ = 0): nothing outside the frame is
+    foreground, and keeping them in f is what lowers the score of a box that leaves the
+    frame.  The mask never enters f: Σ_u q(u) = F, the kernel-weighted foreground fraction of
+    the box, ≤ 1 (SPEC B.4).
+
+    Pixel weights (the gradient magnitudes of a histogram of oriented edges, SPEC B.5) do
+    enter f, box by box: every histogram sums to 1 (to F with a mask), except that of a box
+    whose sample points all have weight 0, which is all zero — its Bhattacharyya coefficient
+    with any reference is then 0, never NaN.
 
     Parameters
     ----------
@@ -481,11 +595,15 @@ def kernel_histograms(bin_image: np.ndarray, centres: np.ndarray, box_sizes: np.
         The grid of :func:`kernel_grid`.
     foreground : ndarray of bool, shape (H, W), optional
         ξ of L (16).
+    pixel_weights : ndarray of float, shape (H, W), optional
+        g, a non-negative weight per pixel that multiplies the kernel weight of every sample
+        point falling in that pixel.
 
     Returns
     -------
     ndarray, shape (P, B)
-        One histogram per box; rows sum to 1 without a mask and to F with one.
+        One histogram per box; rows sum to 1 without a mask and to F with one (to 0 for a
+        box without any weight).
 
     Examples
     --------
@@ -497,7 +615,16 @@ def kernel_histograms(bin_image: np.ndarray, centres: np.ndarray, box_sizes: np.
     array([[0.5, 0.5]])
     >>> kernel_histograms(bins, np.array([[2.0, 2.0]]), np.array([[4.0, 4.0]]), 2, (4, 4), foreground=bins == 1)
     array([[0. , 0.5]])
+
+    Weighting the right half 3 times as much as the left moves the split to 1 : 3:
+
+    >>> kernel_histograms(bins, np.array([[2.0, 2.0]]), np.array([[4.0, 4.0]]), 2, (4, 4),
+    ...                   pixel_weights=np.where(bins == 1, 3.0, 1.0))
+    array([[0.25, 0.75]])
     """
+    if pixel_weights is not None and np.shape(pixel_weights) != np.shape(bin_image):
+        raise TrackingError(f"pixel_weights must have the shape {np.shape(bin_image)} of the bin image, "
+                            f"got {np.shape(pixel_weights)}")
     offsets, weights = kernel_grid(tuple(samples))
     n_boxes = centres.shape[0]
     height, width = bin_image.shape
@@ -509,11 +636,17 @@ def kernel_histograms(bin_image: np.ndarray, centres: np.ndarray, box_sizes: np.
     pixels = np.clip(ys, 0, height - 1).astype(np.intp) * width + np.clip(xs, 0, width - 1).astype(np.intp)
     slots = bin_image.ravel()[pixels] + (np.arange(n_boxes, dtype=np.intp) * n_bins)[:, None]
     sample_weights = np.broadcast_to(weights, pixels.shape)
+    if pixel_weights is not None:
+        sample_weights = sample_weights * np.asarray(pixel_weights, dtype=np.float64).ravel()[pixels]
+        totals = sample_weights.sum(axis=1)                                        # 1 / f, box by box
     if foreground is not None:
         inside = (xs >= 0) & (xs < width) & (ys >= 0) & (ys < height)
         sample_weights = sample_weights * (foreground.ravel()[pixels] & inside)
     counts = np.bincount(slots.ravel(), weights=sample_weights.ravel(), minlength=n_boxes * n_bins)
-    return counts.reshape(n_boxes, n_bins) / weights.sum()                         # f of L (10)
+    if pixel_weights is None:
+        return counts.reshape(n_boxes, n_bins) / weights.sum()                     # f of L (10)
+    # A box without any weight keeps its all-zero row rather than 0 / 0.
+    return counts.reshape(n_boxes, n_bins) / np.where(totals > 0, totals, 1.0)[:, None]
 
 
 def bhattacharyya(histograms: np.ndarray, references: np.ndarray) -> np.ndarray:
@@ -548,16 +681,18 @@ def false_alarm_histogram(scene_counts: np.ndarray, templates: np.ndarray, targe
     histogram — the literal W (18), which removes a target colour from FA entirely.
     ``"counts"``: q_FA ∝ max(n_scene − Σ_j A_j q_j, 0), subtracting the pixels the targets
     cover (A_j of them) from the scene's pixel counts.  Either way the result is renormalised
-    to sum 1, and is uniform if nothing is left (SPEC B.3).
+    to sum 1, and is uniform if nothing is left (SPEC B.3) — as when the scene itself is empty,
+    an edge histogram of a frame without edges.
 
     Parameters
     ----------
     scene_counts : ndarray, shape (B,)
-        Pixel counts of every bin over the whole frame (no kernel).
+        Pixel counts of every bin over the whole frame (no kernel); for weighted pixels, the
+        sums of their weights.
     templates : ndarray, shape (τ, B)
         The target templates q_j, rows summing to 1.
     target_areas : ndarray, shape (τ,), optional
-        A_j in pixels (needed by ``"counts"``).
+        A_j in pixels, or in pixel weight (needed by ``"counts"``).
     mode : {"subtract", "counts"}
 
     Returns
@@ -580,6 +715,8 @@ def false_alarm_histogram(scene_counts: np.ndarray, templates: np.ndarray, targe
     """
     _choice("false_alarm_histogram", "mode", mode, FA_HISTOGRAMS)
     scene_counts = np.asarray(scene_counts, dtype=np.float64)
+    if not scene_counts.sum() > 0:
+        return np.full(scene_counts.shape, 1.0 / scene_counts.size)
     if mode == "subtract":
         scene, targets = scene_counts / scene_counts.sum(), templates.sum(axis=0)
     else:
@@ -626,15 +763,19 @@ class ColourConfig:
                                 f"({MAX_BINS_PER_CHANNEL}³ joint bins), got {bins}")
         object.__setattr__(self, "bins", bins)
         object.__setattr__(self, "sigma", _positive("ColourConfig", "sigma", self.sigma))
-        if isinstance(self.samples, (str, bytes)) or not hasattr(self.samples, "__len__") or len(self.samples) != 2:
-            raise TrackingError(f"ColourConfig.samples must be a pair (across, down), got {self.samples!r}")
-        object.__setattr__(self, "samples", tuple(_count("ColourConfig", "samples", n) for n in self.samples))
+        object.__setattr__(self, "samples", _samples("ColourConfig", self.samples))
         _choice("ColourConfig", "fa_hist", self.fa_hist, FA_HISTOGRAMS)
 
     @property
     def n_bins(self) -> int:
         """B = bins³."""
         return self.bins ** 3
+
+
+def _samples(owner: str, value) -> tuple[int, int]:
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:
+        raise TrackingError(f"{owner}.samples must be a pair (across, down), got {value!r}")
+    return tuple(_count(owner, "samples", n) for n in value)
 
 
 class ColourCue:
@@ -646,9 +787,13 @@ class ColourCue:
     the templates q_1 … q_τ and q_FA (W (18)), recomputed every frame from the whole frame.
 
     Templates are set from boxes ``(x, y, w, h)`` with :meth:`set_templates` or one at a time
-    with :meth:`add_target` / :meth:`remove_target`; they stay fixed (W describes no update).
-    A template is the histogram of its box sampled exactly as a particle's box, so a particle
-    that sits on the box scores ρ = 1.
+    with :meth:`add_target` / :meth:`remove_target`.  A template is the histogram of its box
+    sampled exactly as a particle's box, so a particle that sits on the box scores ρ = 1.
+    W describes no template update, so they stay fixed unless :meth:`replace_template` is
+    called (the update of C (16), SPEC B.5); :attr:`initial_templates` keeps them as built.
+
+    Subclasses change what is counted by supplying the bin image and the pixel weights of a
+    frame (``_image_features`` / ``_frame_features``); templates, q_FA and the scores follow.
 
     Examples
     --------
@@ -671,14 +816,29 @@ class ColourCue:
     name: ClassVar[str] = "colour"
     config_type: ClassVar[type] = ColourConfig
 
-    def __init__(self, config: ColourConfig = ColourConfig()) -> None:
-        if not isinstance(config, ColourConfig):
-            raise TrackingError(f"{type(self).__name__} needs a ColourConfig, got {type(config).__name__}")
+    def __init__(self, config=None) -> None:
+        if config is None:
+            config = self.config_type()
+        if not isinstance(config, self.config_type):
+            wanted = self.config_type.__name__
+            raise TrackingError(f"{type(self).__name__} needs {'an' if wanted[0] in 'AEIOU' else 'a'} {wanted}, "
+                                f"got {type(config).__name__}")
         self.config = config
         self._templates = np.zeros((0, config.n_bins))
+        self._initial = self._templates
+        self._shared = False                                # a view of _templates was handed out
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.config!r}, targets={self.n_targets})"
+
+    # -- what is counted ----------------------------------------------------------------------
+    def _image_features(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """The bin image (H, W) of a frame and its pixel weights (None: every pixel counts 1)."""
+        return colour_bins(image, self.config.bins), None
+
+    def _frame_features(self, obs: Observation) -> tuple[np.ndarray, np.ndarray | None]:
+        """:meth:`_image_features` of the observed frame, memoised on the observation."""
+        return obs.colour_bins(self.config.bins), None
 
     # -- templates --------------------------------------------------------------------------
     @property
@@ -688,8 +848,24 @@ class ColourCue:
 
     @property
     def templates(self) -> np.ndarray:
-        """The target templates q_j, shape (τ, B), rows summing to 1 (a read-only view)."""
+        """The current target templates q_j, shape (τ, B), rows summing to 1.
+
+        (An edge template of a box without any edge is all zero.)  A read-only snapshot: a
+        later :meth:`replace_template` does not change it.
+        """
+        self._shared = True
         view = self._templates.view()
+        view.flags.writeable = False
+        return view
+
+    @property
+    def initial_templates(self) -> np.ndarray:
+        """The templates as built by :meth:`set_templates` / :meth:`add_target`, shape (τ, B) (read-only).
+
+        :meth:`replace_template` leaves them alone; :meth:`remove_target` removes a row here
+        too, so row j is always target j's q_init (C (16)).
+        """
+        view = self._initial.view()
         view.flags.writeable = False
         return view
 
@@ -705,65 +881,120 @@ class ColourCue:
         foreground : ndarray of bool, shape (H, W), optional
             The foreground mask of that frame (used by :class:`ForegroundColourCue` only).
         """
-        self._templates = self._build_templates(image, boxes, foreground)
+        templates = self._build_templates(image, boxes, foreground)
+        self._templates, self._initial, self._shared = templates, templates.copy(), False
 
     def add_target(self, image: np.ndarray, box, foreground: np.ndarray | None = None) -> int:
         """Append the template of one new target, box ``(x, y, w, h)``; returns its index τ − 1."""
         template = self._build_templates(image, np.reshape(np.asarray(box, dtype=np.float64), (1, -1)), foreground)
         self._templates = np.concatenate([self._templates, template])
+        self._initial = np.concatenate([self._initial, template])
+        self._shared = False
         return self.n_targets - 1
 
     def remove_target(self, index: int) -> None:
         """Forget target ``index``; the templates after it move down by one, as the tracker's targets must."""
-        if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < self.n_targets:
-            raise TrackingError(f"no target {index!r} to remove; the cue holds targets 0..{self.n_targets - 1}")
+        index = self._target_index(index, "remove")
         self._templates = np.delete(self._templates, index, axis=0)
+        self._initial = np.delete(self._initial, index, axis=0)
+        self._shared = False
+
+    def replace_template(self, index: int, histogram) -> None:
+        """Make ``histogram``, normalised to sum 1, the current template of target ``index``.
+
+        Parameters
+        ----------
+        index : int
+            The target, 0 … τ − 1.
+        histogram : array_like, shape (B,)
+            Finite, non-negative, with a positive sum.
+
+        Raises
+        ------
+        TrackingError
+            A bad index, shape or value, or a histogram that sums to 0.
+        """
+        index = self._target_index(index, "replace the template of")
+        try:
+            histogram = np.asarray(histogram, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise TrackingError(f"a template must be an array of {self.config.n_bins} numbers") from None
+        if histogram.shape != (self.config.n_bins,):
+            raise TrackingError(f"a template of the {self.name} cue must have shape ({self.config.n_bins},), "
+                                f"got {histogram.shape}")
+        if not np.isfinite(histogram).all() or (histogram < 0).any():
+            raise TrackingError("a template must be finite and non-negative")
+        total = histogram.sum()
+        if not total > 0:
+            raise TrackingError("a template must have a positive sum; an all-zero histogram cannot be normalised")
+        if self._shared:                                    # keep the snapshots handed out intact
+            self._templates, self._shared = self._templates.copy(), False
+        self._templates[index] = histogram / total
+
+    def _target_index(self, index, action: str) -> int:
+        if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < self.n_targets:
+            raise TrackingError(f"no target {index!r} to {action}; the cue holds targets 0..{self.n_targets - 1}")
+        return int(index)
 
     def _build_templates(self, image, boxes, foreground) -> np.ndarray:
         image = _checked_image(image)
         if foreground is not None:
             foreground = _checked_mask(foreground, image.shape[:2])
         boxes = _boxes(boxes, image.shape[:2])
-        bin_image = colour_bins(image, self.config.bins)
-        return self._template_histograms(bin_image, boxes, foreground)
+        return self._template_histograms(self._image_features(image), boxes, foreground)
 
-    def _template_histograms(self, bin_image: np.ndarray, boxes: np.ndarray, foreground) -> np.ndarray:
-        return kernel_histograms(bin_image, box_centres(boxes), boxes[:, 2:], self.config.n_bins, self.config.samples)
+    def _template_histograms(self, features: tuple, boxes: np.ndarray, foreground) -> np.ndarray:
+        bin_image, weights = features
+        return kernel_histograms(bin_image, box_centres(boxes), boxes[:, 2:], self.config.n_bins, self.config.samples,
+                                 pixel_weights=weights)
 
     # -- scoring ----------------------------------------------------------------------------
     def histograms(self, obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
         """The candidate histograms h of all particles' boxes, shape (P, B) (L (9)–(11))."""
         states, owner = _particles(obs, states, owner)
-        return self._candidate_histograms(obs, obs.colour_bins(self.config.bins), states, owner)
+        return self._candidate_histograms(obs, self._frame_features(obs), states, owner)
 
-    def _candidate_histograms(self, obs: Observation, bin_image: np.ndarray, states: np.ndarray,
+    def _candidate_histograms(self, obs: Observation, features: tuple, states: np.ndarray,
                               owner: np.ndarray) -> np.ndarray:
+        bin_image, weights = features
         sizes = _particle_sizes(obs, states, owner)
-        return kernel_histograms(bin_image, states[:, :2], sizes, self.config.n_bins, self.config.samples)
+        return kernel_histograms(bin_image, states[:, :2], sizes, self.config.n_bins, self.config.samples,
+                                 pixel_weights=weights)
 
     def false_alarm_histogram(self, obs: Observation) -> np.ndarray:
-        """q_FA of this frame, shape (B,) (W (18)); A_j = w_j · h_j from ``obs.sizes``."""
-        self._check_targets(obs)
-        return self._false_alarm(obs, obs.colour_bins(self.config.bins))
+        """q_FA of this frame, shape (B,) (W (18)); A_j = w_j · h_j from ``obs.sizes``.
 
-    def _false_alarm(self, obs: Observation, bin_image: np.ndarray) -> np.ndarray:
-        scene = np.bincount(bin_image.ravel(), minlength=self.config.n_bins)     # kernel-free, whole frame
-        areas = obs.sizes.prod(axis=1)
-        return false_alarm_histogram(scene, self._templates, areas, self.config.fa_hist)
+        With pixel weights, the scene counts are the weights summed per bin, and A_j is the
+        weight within target j's box (``obs.sizes`` at ``obs.centres``).
+        """
+        self._check_targets(obs)
+        return self._false_alarm(obs, self._frame_features(obs))
+
+    def _false_alarm(self, obs: Observation, features: tuple) -> np.ndarray:
+        bin_image, weights = features
+        scene = np.bincount(bin_image.ravel(), weights=None if weights is None else weights.ravel(),
+                            minlength=self.config.n_bins)                       # kernel-free, whole frame
+        if weights is None:
+            amounts = obs.sizes.prod(axis=1)
+        elif self.config.fa_hist == "counts":
+            amounts = _box_sums(weights, obs.centres, obs.sizes)
+        else:
+            amounts = None                                                      # "subtract" needs none
+        return false_alarm_histogram(scene, self._templates, amounts, self.config.fa_hist)
 
     def log_likelihoods(self, obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
         """log p_1 … log p_τ, log p_FA = −(1 − ρ) / (2σ²) of every particle, shape (P, τ + 1) (W (16)–(19))."""
         states, owner = _particles(obs, states, owner)
         self._check_targets(obs)
-        bin_image = obs.colour_bins(self.config.bins)
-        references = np.concatenate([self._templates, self._false_alarm(obs, bin_image)[None, :]])   # (τ + 1, B)
+        features = self._frame_features(obs)
+        references = np.concatenate([self._templates, self._false_alarm(obs, features)[None, :]])   # (τ + 1, B)
         rho = np.empty((states.shape[0], references.shape[0]))
         # The dense (block, B) histograms of a block stay small enough for the allocator to
         # reuse their memory; histograms of all P particles at once (megabytes) would be mapped
         # and unmapped on every call, which costs more than building them.
         for start in range(0, states.shape[0], HISTOGRAM_BLOCK):
             block = slice(start, start + HISTOGRAM_BLOCK)
-            rho[block] = bhattacharyya(self._candidate_histograms(obs, bin_image, states[block], owner[block]),
+            rho[block] = bhattacharyya(self._candidate_histograms(obs, features, states[block], owner[block]),
                                        references)
         return _log_gaussian(1.0 - rho, self.config.sigma)                          # d² = 1 − ρ (W (17))
 
@@ -806,23 +1037,136 @@ class ForegroundColourCue(ColourCue):
 
     name: ClassVar[str] = "foreground"
 
-    def _template_histograms(self, bin_image: np.ndarray, boxes: np.ndarray, foreground) -> np.ndarray:
+    def _template_histograms(self, features: tuple, boxes: np.ndarray, foreground) -> np.ndarray:
         if foreground is None:
             raise TrackingError("the foreground cue builds its templates from the foreground mask; pass foreground=")
-        plain = super()._template_histograms(bin_image, boxes, None)
+        bin_image, weights = features
+        plain = super()._template_histograms(features, boxes, None)
         masked = kernel_histograms(bin_image, box_centres(boxes), boxes[:, 2:], self.config.n_bins,
-                                   self.config.samples, foreground)
+                                   self.config.samples, foreground, pixel_weights=weights)
         mass = masked.sum(axis=1, keepdims=True)
         # The template describes the target, not how much of its box it fills: normalise to 1.
         return np.where(mass > 0, masked / np.where(mass > 0, mass, 1.0), plain)
 
-    def _candidate_histograms(self, obs: Observation, bin_image: np.ndarray, states: np.ndarray,
+    def _candidate_histograms(self, obs: Observation, features: tuple, states: np.ndarray,
                               owner: np.ndarray) -> np.ndarray:
         if obs.foreground is None:
             raise TrackingError("the foreground cue needs Observation.foreground, the background model's mask; got None")
+        bin_image, weights = features
         sizes = _particle_sizes(obs, states, owner)
         return kernel_histograms(bin_image, states[:, :2], sizes, self.config.n_bins, self.config.samples,
-                                 obs.foreground)
+                                 obs.foreground, pixel_weights=weights)
+
+
+# -- edge cue -------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class EdgeConfig:
+    """Settings of the edge cue (the HOE of SPEC B.5).
+
+    Attributes
+    ----------
+    bins : int
+        Orientation bins (C: 16), at most 360.
+    sigma : float
+        σ of C (10) (SPEC default 0.15).
+    samples : (int, int)
+        Sample points across and down a box (:func:`kernel_grid`).
+    min_gradient : float
+        Pixels with a Sobel magnitude below this are ignored (SPEC: 10; ≥ 0).
+    unsigned : bool
+        Orientations in [0, π) instead of [0, 2π): an edge counts the same whichever side is
+        brighter.
+    fa_hist : {"subtract", "counts"}
+        How q_FA removes the target histograms from the scene's (:func:`false_alarm_histogram`).
+    """
+
+    bins: int = 16
+    sigma: float = 0.15
+    samples: tuple[int, int] = (12, 24)
+    min_gradient: float = 10.0
+    unsigned: bool = False
+    fa_hist: str = "subtract"
+
+    def __post_init__(self) -> None:
+        bins = _count("EdgeConfig", "bins", self.bins)
+        if bins > MAX_ORIENTATION_BINS:
+            raise TrackingError(f"EdgeConfig.bins must be at most {MAX_ORIENTATION_BINS}, got {bins}")
+        object.__setattr__(self, "bins", bins)
+        object.__setattr__(self, "sigma", _positive("EdgeConfig", "sigma", self.sigma))
+        object.__setattr__(self, "samples", _samples("EdgeConfig", self.samples))
+        gradient = self.min_gradient
+        if isinstance(gradient, bool) or not isinstance(gradient, (int, float, np.integer, np.floating)) \
+                or not math.isfinite(gradient) or gradient < 0:
+            raise TrackingError(f"EdgeConfig.min_gradient must be a non-negative finite number, got {gradient!r}")
+        object.__setattr__(self, "min_gradient", float(gradient))
+        if not isinstance(self.unsigned, (bool, np.bool_)):
+            raise TrackingError(f"EdgeConfig.unsigned must be True or False, got {self.unsigned!r}")
+        object.__setattr__(self, "unsigned", bool(self.unsigned))
+        _choice("EdgeConfig", "fa_hist", self.fa_hist, FA_HISTOGRAMS)
+
+    @property
+    def n_bins(self) -> int:
+        """B = bins."""
+        return self.bins
+
+
+class EdgeCue(ColourCue):
+    """Edge-orientation similarity of every particle to every target and to the scene (C (8)–(10)).
+
+    As :class:`ColourCue`, with the histogram of oriented edges (HOE, SPEC B.5) in place of
+    the colour histogram: every sample point adds K(r) · g to the bin of its pixel's gradient
+    orientation (:func:`orientation_bins`), g being the Sobel magnitude (0 below
+    ``min_gradient``), and the histogram is normalised by Σ K · g over the box, so it sums
+    to 1.  A box without any edge gets an all-zero histogram, whose ρ with every reference is
+    0: its particle scores the same, −1 / (2σ²), for every hypothesis, and the edge cue stays
+    out of that particle's decision.  A template of such a box is all zero too.
+
+    q_FA subtracts the templates from the magnitude-weighted orientation histogram of the
+    whole frame; with ``fa_hist="counts"`` the amount of target j is the edge magnitude
+    within its box.  The ``foreground`` arguments of the template methods are ignored.
+
+    Examples
+    --------
+    A bright square on a dark background, sampled at every pixel of its 24×24 box: its four
+    sides give four orientations, 0, π/2, π and 3π/2, a quarter each (the corners lie outside
+    the kernel's ellipse).  One particle sits on the box, one on the flat background:
+
+    >>> image = np.zeros((60, 80, 3), np.uint8)
+    >>> image[20:40, 30:50] = 200
+    >>> cue = EdgeCue(EdgeConfig(samples=(24, 24)))
+    >>> cue.set_templates(image, np.array([[28, 18, 24, 24]]))
+    >>> cue.templates[0, ::4]
+    array([0.25, 0.25, 0.25, 0.25])
+    >>> obs = Observation(image, None, [[40.0, 30.0]], [[24.0, 24.0]], np.zeros((0, 2)))
+    >>> states = np.array([[40.0, 30.0, 0, 0, 0], [10.0, 50.0, 0, 0, 0]])
+    >>> cue.histograms(obs, states, np.array([0, 0])).sum(axis=1)         # normalised; no edges
+    array([1., 0.])
+    >>> logs = cue.log_likelihoods(obs, states, np.array([0, 0]))         # columns θ1, FA
+    >>> (1.0 + 2 * 0.15 ** 2 * logs).round(6)                             # ρ
+    array([[1., 0.],
+           [0., 0.]])
+
+    q_FA holds what the frame has and the template lacks, here the diagonal corners.
+    """
+
+    name: ClassVar[str] = "edges"
+    config_type: ClassVar[type] = EdgeConfig
+
+    def _image_features(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return orientation_bins(image, self.config.bins, self.config.unsigned, self.config.min_gradient)
+
+    def _frame_features(self, obs: Observation) -> tuple[np.ndarray, np.ndarray]:
+        return obs.orientation_bins(self.config.bins, self.config.unsigned, self.config.min_gradient)
+
+
+def _box_sums(weights: np.ndarray, centres: np.ndarray, sizes: np.ndarray) -> np.ndarray:
+    """The sum of ``weights`` over the pixels whose centres lie in each box, shape (τ,)."""
+    height, width = weights.shape
+    low = np.ceil(centres - sizes / 2.0 - 0.5)                  # first pixel i with i + ½ ≥ the box's edge
+    high = np.ceil(centres + sizes / 2.0 - 0.5)                 # one past the last
+    low = np.clip(low, 0, [width, height]).astype(np.intp)
+    high = np.clip(high, 0, [width, height]).astype(np.intp)
+    return np.array([weights[y0:y1, x0:x1].sum() for (x0, y0), (x1, y1) in zip(low, high)])
 
 
 def _particle_sizes(obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
@@ -850,7 +1194,8 @@ def _boxes(boxes, shape: tuple[int, int]) -> np.ndarray:
 
 # -- registry -------------------------------------------------------------------------------------
 #: The cues by name; each class takes its ``config_type`` settings.
-CUES: dict[str, type] = {"colour": ColourCue, "location": LocationCue, "foreground": ForegroundColourCue}
+CUES: dict[str, type] = {"colour": ColourCue, "location": LocationCue, "foreground": ForegroundColourCue,
+                         "edges": EdgeCue}
 
 
 def make_cue(name: str, **options) -> Cue:
@@ -860,10 +1205,12 @@ def make_cue(name: str, **options) -> Cue:
     --------
     >>> make_cue("location", sigma=5.0)
     LocationCue(LocationConfig(sigma=5.0, fa_mode='centroid', gate=3.0, reference='previous'))
-    >>> make_cue("edges")
+    >>> make_cue("edges", bins=8)
+    EdgeCue(EdgeConfig(bins=8, sigma=0.15, samples=(12, 24), min_gradient=10.0, unsigned=False, fa_hist='subtract'), targets=0)
+    >>> make_cue("sound")
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.UnknownCueError: unknown cue 'edges'; known cues: colour, location, foreground
+    plugins.video_tracking.errors.UnknownCueError: unknown cue 'sound'; known cues: colour, location, foreground, edges
     """
     cue_type = CUES.get(name) if isinstance(name, str) else None
     if cue_type is None:

@@ -28,7 +28,7 @@ __all__ = ["StagedOutputs", "write_tracks", "write_diagnostics", "write_summary"
 
 #: Header of ``diagnostics.csv``.
 DIAGNOSTIC_HEADER = ("frame", "id", "mean_m_target", "mean_m_intersection", "mean_bel", "mean_m_empty", "mean_r",
-                     "particles", "ess")
+                     "particles", "ess", "similarity", "occluded")
 
 
 class StagedOutputs:
@@ -111,13 +111,18 @@ def write_tracks(path: str | PathLike[str], rows: Sequence[Sequence[float]]) -> 
             handle.write(f"{int(frame)},{int(track_id)},{x:.3f},{y:.3f},{w:.3f},{h:.3f},-1,-1,-1,-1\n")
 
 
-def write_diagnostics(path: str | PathLike[str], records: Sequence[Mapping[str, float]]) -> None:
-    """Write one CSV line per frame and target, columns :data:`DIAGNOSTIC_HEADER`."""
+def write_diagnostics(path: str | PathLike[str], records: Sequence[Mapping[str, float]],
+                      header: Sequence[str] = DIAGNOSTIC_HEADER) -> None:
+    """Write one CSV line per frame and target, columns ``header`` (default :data:`DIAGNOSTIC_HEADER`).
+
+    The tracker passes ``("frame", "id")`` and its
+    :func:`~plugins.video_tracking.tracker.diagnostic_columns`, which name the cues.
+    """
     with open(path, "w", encoding="ascii", newline="") as handle:
         writer = csv.writer(handle, lineterminator="\n")
-        writer.writerow(DIAGNOSTIC_HEADER)
+        writer.writerow(header)
         for record in records:
-            writer.writerow([_cell(record[name]) for name in DIAGNOSTIC_HEADER])
+            writer.writerow([_cell(record[name]) for name in header])
 
 
 def _cell(value: float) -> str:
@@ -147,12 +152,16 @@ def _json_ready(value: Any) -> Any:
     return value
 
 
-def plot_diagnostics(path: str | PathLike[str], records: Sequence[Mapping[str, float]], title: str = "") -> None:
-    """The diagnostics curves of W's Fig. 10, one line per target, as a PNG.
+def plot_diagnostics(path: str | PathLike[str], records: Sequence[Mapping[str, float]], title: str = "",
+                     threshold: float | None = 0.6) -> None:
+    """The diagnostics curves of W's Fig. 10 and C's Fig. 2 and 5, one line per target, as a PNG.
 
-    Four panels over the frames: mean m(θ_j) (W (33)), mean mass on intersections with θ_j
-    (W (34)), mean Bel(θ_j) (W (35)) and mean m(∅).  Uses matplotlib's Agg canvas directly,
-    so no global backend is touched.
+    Eight panels over the frames: mean m(θ_j) (W (33)), mean mass on intersections with θ_j
+    (W (34)), mean Bel(θ_j) (W (35)), mean m(∅), the total similarity ρ_t (C (15)) with the
+    occlusion threshold ``threshold`` and the occluded frames marked, the feature confidences
+    λ (C (13), mean over the live targets, one line per cue), the particle count and the
+    effective sample size.  Uses matplotlib's Agg canvas directly, so no global backend is
+    touched.  Keys missing from the records leave their panel empty.
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -160,24 +169,55 @@ def plot_diagnostics(path: str | PathLike[str], records: Sequence[Mapping[str, f
     panels = (("mean_m_target", "mean m(θj)  [W (33)]"),
               ("mean_m_intersection", "mean m(θj ∩ …)  [W (34)]"),
               ("mean_bel", "mean Bel(θj)  [W (35)]"),
-              ("mean_m_empty", "mean m(∅)"))
-    figure = Figure(figsize=(10, 7), layout="constrained")
+              ("mean_m_empty", "mean m(∅)"),
+              ("similarity", "total similarity ρt  [C (15)]"),
+              (None, "feature confidence λ, mean over targets  [C (13)]"),
+              ("particles", "particles"),
+              ("ess", "effective sample size"))
+    figure = Figure(figsize=(10, 12), layout="constrained")
     FigureCanvasAgg(figure)
-    axes = figure.subplots(2, 2, sharex=True)
+    axes = figure.subplots(4, 2, sharex=True)
     ids = sorted({int(r["id"]) for r in records})
     many = len(ids) > 10
+    bounded = {"mean_m_target", "mean_m_intersection", "mean_bel", "mean_m_empty", "similarity"}
     for ax, (key, label) in zip(axes.ravel(), panels):
-        for track_id in ids:
-            own = [r for r in records if int(r["id"]) == track_id]
-            ax.plot([r["frame"] for r in own], [r[key] for r in own], linewidth=0.9 if many else 1.3,
-                    label=f"target {track_id}")
         ax.set_title(label)
-        ax.set_ylim(-0.02, 1.02)
         ax.grid(True, alpha=0.3)
-    for ax in axes[1]:
+        if key is None:
+            _plot_confidences(ax, records)
+            continue
+        for track_id in ids:
+            own = [r for r in records if int(r["id"]) == track_id and key in r]
+            line, = ax.plot([r["frame"] for r in own], [r[key] for r in own], linewidth=0.9 if many else 1.3,
+                            label=f"target {track_id}")
+            if key == "similarity":
+                hidden = [r for r in own if r.get("occluded", 0) >= 0.5]
+                ax.plot([r["frame"] for r in hidden], [r[key] for r in hidden], "x", color=line.get_color(),
+                        markersize=4)
+        if key in bounded:
+            ax.set_ylim(-0.02, 1.02)
+        if key == "similarity" and threshold is not None:
+            ax.axhline(threshold, color="black", linestyle="--", linewidth=0.8, label=f"T = {threshold:g}")
+    for ax in axes[-1]:
         ax.set_xlabel("frame")
     if ids and not many:
         axes[0, 0].legend(fontsize="small")
     if title:
         figure.suptitle(title)
     figure.savefig(path, dpi=100, format="png")
+
+
+def _plot_confidences(ax, records: Sequence[Mapping[str, float]]) -> None:
+    """One line per cue: the mean over the targets of each frame of ``confidence_<cue>``."""
+    cues = sorted({key[len("confidence_"):] for r in records for key in r if key.startswith("confidence_")})
+    for cue in cues:
+        key = f"confidence_{cue}"
+        sums: dict[float, list[float]] = {}
+        for r in records:
+            if key in r:
+                sums.setdefault(r["frame"], []).append(r[key])
+        frames = sorted(sums)
+        ax.plot(frames, [sum(sums[f]) / len(sums[f]) for f in frames], label=cue)
+    ax.set_ylim(-0.02, 1.02)
+    if cues:
+        ax.legend(fontsize="small")

@@ -63,6 +63,7 @@ __all__ = [
     "illumination",
     "scale_change",
     "demo",
+    "entering_leaving",
     "PRESETS",
 ]
 
@@ -875,6 +876,53 @@ def demo(seed: int = 0) -> SceneConfig:
                        name="demo")
 
 
+def entering_leaving(seed: int = 0) -> SceneConfig:
+    """Three people walk in through a side border and out through the other, one after another.
+
+    The scene starts empty, so a background model can learn the bare background from
+    the first frames.  Each walker enters at a different time and crosses the image
+    along their own band of rows, so that no two of them ever overlap.  The nearer the
+    walker (lower in the image), the larger they are.
+
+    ======  =============================  =============  =====  =======  =======
+    walker  clothes                        direction      speed  size     rows
+    ======  =============================  =============  =====  =======  =======
+    1       red shirt, navy trousers       left to right  2.5    20 x 50  35-84
+    2       blue shirt, charcoal trousers  right to left  2.3    22 x 56  100-155
+    3       yellow shirt, brown trousers   left to right  2.5    26 x 62  161-222
+    ======  =============================  =============  =====  =======  =======
+
+    Speeds are in pixels per frame.  The frames (0-based indices) of each walker's first
+    and last ground-truth rows are:
+
+    * walker 1: first row at frame 5, last row at frame 139;
+    * walker 2: first row at frame 20, last row at frame 167;
+    * walker 3: first row at frame 40, last row at frame 177.
+
+    Frames 0-4 and 178-199 have no ground-truth row.  A walker's first row is 2 px wide
+    and starts at the shoulders, because the narrower head is not yet in view.  The
+    scene has 200 frames: a crossing takes about 140 frames at these speeds, and the
+    last walker leaves 22 frames before the end.
+
+    Examples
+    --------
+    >>> [(w.id, w.first_frame, w.velocity[0]) for w in entering_leaving().walkers]
+    [(1, 5, 2.5), (2, 20, -2.3), (3, 40, 2.5)]
+    """
+    width = 320
+    # A start centre half a box width outside the border, plus 2 px, puts the first two
+    # columns of the box in the image at the walker's first frame.
+    walkers = (
+        Walker(id=1, first_frame=5, start_centre=(2 - 20 / 2, 60.0), velocity=(2.5, 0.0), size=(20, 50),
+               shirt=RED, trousers=NAVY, depth=3.0),
+        Walker(id=2, first_frame=20, start_centre=(width - 2 + 22 / 2, 128.0), velocity=(-2.3, 0.0), size=(22, 56),
+               shirt=BLUE, trousers=CHARCOAL, depth=2.0),
+        Walker(id=3, first_frame=40, start_centre=(2 - 26 / 2, 192.0), velocity=(2.5, 0.0), size=(26, 62),
+               shirt=YELLOW, trousers=BROWN, depth=1.0),
+    )
+    return SceneConfig(walkers=walkers, width=width, height=240, n_frames=200, seed=seed, name="entering_leaving")
+
+
 #: The presets by name; each maps a seed to a :class:`SceneConfig`.
 PRESETS: dict[str, Callable[[int], SceneConfig]] = {
     "crossing": crossing,
@@ -883,4 +931,5 @@ PRESETS: dict[str, Callable[[int], SceneConfig]] = {
     "illumination": illumination,
     "scale_change": scale_change,
     "demo": demo,
+    "entering_leaving": entering_leaving,
 }

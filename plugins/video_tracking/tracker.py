@@ -34,17 +34,31 @@ import numpy as np
 
 from belief.errors import BeliefError
 from belief.rules import get_rule
+from plugins.video_tracking.adaptive import (
+    AdaptiveConfig,
+    feature_confidences,
+    feature_entropies,
+    feature_spreads,
+    fuse_adaptive,
+    fuse_product,
+    fuse_sum,
+    occluded,
+    total_similarity,
+    update_templates,
+)
 from plugins.video_tracking.background import BackgroundConfig, BackgroundModel
 from plugins.video_tracking.cues import (
     CUES,
     AppearanceCue,
     ColourConfig,
+    EdgeConfig,
     LocationConfig,
     Observation,
 )
 from plugins.video_tracking.errors import InitError, TrackingError, UnknownCueError
 from plugins.video_tracking.evaluation import read_mot
 from plugins.video_tracking.fusion import WEIGHTS, CueFusion, FusionConfig
+from plugins.video_tracking.initiation import InitiationConfig, Initiator
 from plugins.video_tracking.particles import (
     CX,
     CY,
@@ -70,20 +84,41 @@ __all__ = [
     "init_from_boxes",
     "read_init_boxes",
     "DIAGNOSTIC_COLUMNS",
+    "diagnostic_columns",
+    "FUSIONS",
     "Summary",
     "run",
 ]
 
-#: Columns of a target's diagnostics, per frame (W (33)–(35), SPEC B.3): unweighted means over
-#: the target's particles of m(θ_J), of the mass on intersections containing θ_J, of
-#: Bel(θ_J), of m(∅), of the inconsistency R of the first fold (W (10)), the particle count and
-#: the effective sample size of the fused weights before resampling.
+#: Columns of a target's diagnostics, per frame, whatever the cues (W (33)–(35), SPEC B.3 and
+#: B.5): unweighted means over the target's particles of m(θ_J), of the mass on intersections
+#: containing θ_J, of Bel(θ_J), of m(∅), of the inconsistency R of the first fold (W (10)); the
+#: particle count and the effective sample size of the weights before resampling; the total
+#: similarity ρ_t of the appearance cues at the estimate (C (15)) and the occlusion flag
+#: ρ_t < T (1 or 0).  :func:`diagnostic_columns` adds one feature confidence per cue (C (13)).
 DIAGNOSTIC_COLUMNS = ("mean_m_target", "mean_m_intersection", "mean_bel", "mean_m_empty", "mean_r",
-                      "particles", "ess")
+                      "particles", "ess", "similarity", "occluded")
+
+
+def diagnostic_columns(cues: Sequence[str]) -> tuple[str, ...]:
+    """The diagnostics of a tracker with ``cues``: :data:`DIAGNOSTIC_COLUMNS`, then ``confidence_<cue>`` per cue.
+
+    Examples
+    --------
+    >>> diagnostic_columns(("colour", "edges"))[-2:]
+    ('confidence_colour', 'confidence_edges')
+    """
+    return DIAGNOSTIC_COLUMNS + tuple(f"confidence_{name}" for name in cues)
 
 
 #: Where window sizes come from (:attr:`TrackerConfig.scale`).
 SCALES = ("perspective", "state")
+
+#: How the cues weigh a particle (:attr:`TrackerConfig.fusion`).
+FUSIONS = ("belief", "adaptive", "sum", "product")
+
+#: The conflict level that drives the adaptive particle count (:attr:`TrackerConfig.kappa`).
+KAPPAS = ("mass", "r")
 
 
 # -- configuration --------------------------------------------------------------------------------
@@ -94,7 +129,7 @@ class TrackerConfig:
     Attributes
     ----------
     particles : int
-        N, particles per target (the maximum when ``adaptive`` is on).
+        N, particles per target (the maximum when ``adaptive_particles`` is on).
     cues : tuple of str
         Cue names of :data:`plugins.video_tracking.cues.CUES`, in fusion order: the
         R-weighted rule folds the cues in this order (SPEC Part D), so it is recorded.
@@ -118,14 +153,40 @@ class TrackerConfig:
         A resampler of :data:`plugins.video_tracking.particles.RESAMPLERS`.
     ess_threshold : float in [0, 1]
         Resample when N_eff < threshold·N; 1 resamples every frame (the papers' choice).
-    adaptive : bool
-        Adapt N to the conflict (SPEC B.3): N_{t+1} = N_min + ⌈(N − N_min)·κ_t⌉ with
-        N_min = ⌈N / 2⌉ and κ_t the mean R of the frame.
-    location, colour, foreground : LocationConfig, ColourConfig, ColourConfig
-        Settings of the location, colour and foreground-masked colour cues (location default:
-        ``fa_mode="gate"``, ``reference="predicted"``).
+    fusion : {"belief", "adaptive", "sum", "product"}
+        How the cues weigh a particle: ``"belief"`` fuses them with ``rule`` and weighs by
+        ``weight`` (W (7), W (32)); ``"adaptive"`` is C's confidence-weighted mix of the
+        product and sum rules (C (11)–(14), :mod:`plugins.video_tracking.adaptive`);
+        ``"sum"`` and ``"product"`` combine the cues' own-target likelihoods with equal
+        weights or by their product.  The belief fusion is run for the diagnostics whatever
+        the strategy, so every run reports the same curves.
+    adaptive_fusion : AdaptiveConfig
+        Settings of the adaptive fusion, of the occlusion test (threshold T of C) and of the
+        template update (C (16)).
+    template_update : bool or None
+        Update the appearance templates every frame by C (16), frozen while the target is
+        occluded (total similarity C (15) below T).  None (default) updates them for the
+        adaptive fusion only, as C does; the belief rules of W keep fixed templates.
+    adaptive_particles : bool
+        Adapt each target's N to its conflict (SPEC B.3): N_{t+1} = N_min + ⌈(N − N_min)·κ⌉
+        with N_min = ⌈N / 2⌉.
+    kappa : {"mass", "r"}
+        The conflict κ of ``adaptive_particles``, per target, as a mean over its particles:
+        ``"mass"`` the mass the fused cues put on target intersections and on ∅ (the
+        non-consensus mass of SPEC B.3); ``"r"`` the inconsistency R of the first fold (W (10)).
+    location, colour, foreground, edges : LocationConfig, ColourConfig, ColourConfig, EdgeConfig
+        Settings of the location, colour, foreground-masked colour and edge cues (location
+        default: ``fa_mode="gate"``, ``reference="predicted"``).
     background : BackgroundConfig
-        The background model of the foreground cue.
+        The background model of the foreground cue and of the automatic initiation.
+    warm_up : int
+        Frames, spread evenly over the whole video, that the background model learns from
+        before tracking starts (0: it learns from the tracked frames only).  Without it the
+        people in view at the first frame are part of the first background.
+    initiation : InitiationConfig or None
+        Start tracks on foreground blobs entering at the image border and end tracks that
+        leave or lose their foreground (SPEC B.4, :mod:`plugins.video_tracking.initiation`);
+        None tracks exactly the targets of the :class:`InitPlan`.
     init_sigma : float
         Spread in pixels of a newborn target's particles around its box centre (W-S1).
 
@@ -139,10 +200,10 @@ class TrackerConfig:
     --------
     >>> TrackerConfig().cues
     ('colour', 'location', 'foreground')
-    >>> TrackerConfig(cues=("colour", "edges"))
+    >>> TrackerConfig(cues=("colour", "sound"))
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.UnknownCueError: unknown cue 'edges'; known cues: colour, location, foreground
+    plugins.video_tracking.errors.UnknownCueError: unknown cue 'sound'; known cues: colour, location, foreground, edges
     """
 
     particles: int = 100
@@ -156,11 +217,18 @@ class TrackerConfig:
     motion: MotionConfig = field(default_factory=lambda: MotionConfig(sigma_pos=3.0, sigma_vel=0.5))
     resampling: str = "systematic"
     ess_threshold: float = 1.0
-    adaptive: bool = False
+    fusion: str = "belief"
+    adaptive_fusion: AdaptiveConfig = field(default_factory=AdaptiveConfig)
+    template_update: bool | None = None
+    adaptive_particles: bool = False
+    kappa: str = "mass"
     location: LocationConfig = field(default_factory=lambda: LocationConfig(fa_mode="gate", reference="predicted"))
     colour: ColourConfig = field(default_factory=ColourConfig)
     foreground: ColourConfig = field(default_factory=ColourConfig)
+    edges: EdgeConfig = field(default_factory=EdgeConfig)
     background: BackgroundConfig = field(default_factory=BackgroundConfig)
+    warm_up: int = 0
+    initiation: InitiationConfig | None = None
     init_sigma: float = 5.0
 
     def __post_init__(self) -> None:
@@ -195,9 +263,24 @@ class TrackerConfig:
                 or self.init_sigma < 0:
             raise TrackingError(f"TrackerConfig.init_sigma must be a non-negative number, got {self.init_sigma!r}")
         for name, kind in (("motion", MotionConfig), ("location", LocationConfig), ("colour", ColourConfig),
-                           ("foreground", ColourConfig), ("background", BackgroundConfig)):
+                           ("foreground", ColourConfig), ("edges", EdgeConfig), ("background", BackgroundConfig),
+                           ("adaptive_fusion", AdaptiveConfig)):
             if not isinstance(getattr(self, name), kind):
                 raise TrackingError(f"TrackerConfig.{name} must be a {kind.__name__}")
+        if self.fusion not in FUSIONS:
+            raise TrackingError(f"unknown fusion {self.fusion!r}; known fusions: {', '.join(FUSIONS)}")
+        if self.kappa not in KAPPAS:
+            raise TrackingError(f"TrackerConfig.kappa must be one of {', '.join(KAPPAS)}, got {self.kappa!r}")
+        for name in ("adaptive_particles",):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise TrackingError(f"TrackerConfig.{name} must be True or False, got {getattr(self, name)!r}")
+        if self.template_update is not None and not isinstance(self.template_update, (bool, np.bool_)):
+            raise TrackingError(f"TrackerConfig.template_update must be None, True or False, "
+                                f"got {self.template_update!r}")
+        if isinstance(self.warm_up, bool) or not isinstance(self.warm_up, (int, np.integer)) or self.warm_up < 0:
+            raise TrackingError(f"TrackerConfig.warm_up must be a non-negative integer, got {self.warm_up!r}")
+        if self.initiation is not None and not isinstance(self.initiation, InitiationConfig):
+            raise TrackingError("TrackerConfig.initiation must be None or an InitiationConfig")
 
     def fusion_config(self) -> FusionConfig:
         """The :class:`FusionConfig` of these settings (raises ``UnknownRuleError`` for a bad rule)."""
@@ -207,12 +290,18 @@ class TrackerConfig:
 
     def cue_config(self, name: str):
         """The settings object of cue ``name``."""
-        return {"location": self.location, "colour": self.colour, "foreground": self.foreground}[name]
+        return {"location": self.location, "colour": self.colour, "foreground": self.foreground,
+                "edges": self.edges}[name]
 
     @property
     def uses_background(self) -> bool:
-        """Whether a background model is needed (the foreground cue is on)."""
-        return "foreground" in self.cues
+        """Whether a background model is needed (the foreground cue or the automatic initiation is on)."""
+        return "foreground" in self.cues or self.initiation is not None
+
+    @property
+    def updates_templates(self) -> bool:
+        """Whether the appearance templates follow the target (C (16)); see ``template_update``."""
+        return self.fusion == "adaptive" if self.template_update is None else bool(self.template_update)
 
 
 # -- target births and deaths ---------------------------------------------------------------------
@@ -425,23 +514,30 @@ class _Target:
     particles: ParticleSet
     estimate: np.ndarray      # (5,) at t − 1
     birth_cy: float = 0.0     # centre row of the birth box, the reference of the perspective scale
+    similarity: float = 0.8   # total similarity ρ_{t−1} of C (15), ρ_0 at birth
+    occluded: bool = False
 
 
 class Tracker:
-    """Tracks the targets of an :class:`InitPlan` through a sequence of frames.
+    """Tracks targets through a sequence of frames.
 
     Parameters
     ----------
     config : TrackerConfig
-    init : InitPlan
-        Births and deaths of the targets.
+    init : InitPlan or None
+        Births and deaths of planned targets.  None, or targets not in the plan, need
+        ``config.initiation``: the tracker then starts and ends tracks itself (SPEC B.4), with
+        ids after the plan's largest.
     rng : numpy.random.Generator
-        The only source of randomness (initialisation, motion noise, resampling).
+        The only source of randomness (initialisation, motion noise, resampling, and the
+        resampling inside the feature confidences through a child generator spawned from it).
 
     Attributes
     ----------
     targets : list
         The live targets in the order of the cues' templates (birth order).
+    diagnostic_columns : tuple of str
+        The keys of every :attr:`Estimate.diagnostics` (:func:`diagnostic_columns`).
 
     Examples
     --------
@@ -452,18 +548,26 @@ class Tracker:
     >>> estimates = [tracker.step(t + 1, scene.frame(t)) for t in range(3)]
     >>> [e.id for e in estimates[-1]], all(np.isfinite(e.box).all() for e in estimates[-1])
     ([1, 2], True)
+    >>> sorted(estimates[-1][0].diagnostics)[:4]
+    ['confidence_colour', 'confidence_foreground', 'confidence_location', 'ess']
     """
 
-    def __init__(self, config: TrackerConfig, init: InitPlan, rng: np.random.Generator) -> None:
+    def __init__(self, config: TrackerConfig, init: InitPlan | None, rng: np.random.Generator) -> None:
         if not isinstance(config, TrackerConfig):
             raise TrackingError(f"Tracker needs a TrackerConfig, got {type(config).__name__}")
-        if not isinstance(init, InitPlan):
-            raise TrackingError(f"Tracker needs an InitPlan, got {type(init).__name__}")
+        if init is not None and not isinstance(init, InitPlan):
+            raise TrackingError(f"Tracker needs an InitPlan or None, got {type(init).__name__}")
+        if init is None and config.initiation is None:
+            raise InitError("nothing to track: give an InitPlan or turn on the automatic initiation "
+                            "(TrackerConfig.initiation)")
         if not isinstance(rng, np.random.Generator):
             raise TrackingError(f"Tracker needs a numpy.random.Generator, got {type(rng).__name__}")
         self.config = config
         self.init = init
         self.rng = rng
+        # A child stream for the confidences' resampling (C (11)) leaves the draws of the
+        # filter itself as they are without it.
+        self._feature_rng = rng.spawn(1)[0]
         self.cues = [CUES[name](config.cue_config(name)) for name in config.cues]
         self.background = BackgroundModel(config.background) if config.uses_background else None
         self.targets: list[_Target] = []
@@ -474,6 +578,10 @@ class Tracker:
         self._last_frame = 0
         self._birth_boxes: list[tuple[float, float, float, float]] = []
         self.perspective: PerspectiveScale | None = None
+        self.initiator: Initiator | None = None
+        planned = [t.id for t in init.targets] if init is not None else []
+        self._next_id = max(planned, default=0) + 1
+        self.diagnostic_columns = diagnostic_columns(config.cues)
 
     # -- births and deaths --------------------------------------------------------------------
     def add_target(self, target: TargetInit, image: np.ndarray, foreground: np.ndarray | None = None) -> Estimate:
@@ -481,7 +589,7 @@ class Tracker:
         if any(t.id == target.id for t in self.targets):
             raise InitError(f"target {target.id} is already being tracked")
         height, width = image.shape[:2]
-        InitPlan((target,), source=self.init.source).check_image(width, height)
+        InitPlan((target,), source=self.init.source if self.init is not None else "").check_image(width, height)
         x, y, w, h = target.box
         centre = (x + w / 2.0, y + h / 2.0)
         for cue in self.cues:
@@ -490,10 +598,11 @@ class Tracker:
         states = initialise(centre, self.config.particles, self.rng, sigma_pos=self.config.init_sigma)
         estimate = np.array([centre[0], centre[1], 0.0, 0.0, 0.0])
         self.targets.append(_Target(target.id, target.last_frame, np.array([w, h]), ParticleSet(states), estimate,
-                                    birth_cy=centre[1]))
+                                    birth_cy=centre[1], similarity=self.config.adaptive_fusion.rho0))
         if self.config.scale == "perspective":
             self._birth_boxes.append(target.box)
             self.perspective = PerspectiveScale.fit(self._birth_boxes)
+        self._next_id = max(self._next_id, target.id + 1)
         self._fusion = None
         return Estimate(self._last_frame, target.id, estimate.copy(), target.box)
 
@@ -508,9 +617,18 @@ class Tracker:
         del self.targets[index]
         self._fusion = None
 
+    def warm_up(self, frames: Iterable[np.ndarray]) -> int:
+        """Let the background model learn from ``frames`` before tracking; returns how many (0 without a model)."""
+        if self.background is None:
+            return 0
+        return self.background.warm_up(frames)
+
     # -- one frame ----------------------------------------------------------------------------
     def step(self, frame: int, image: np.ndarray) -> list[Estimate]:
         """Process 1-based ``frame``: deaths, W-S2..S5 for the live targets, then births.
+
+        With the automatic initiation, tracks that left or lost their foreground end here
+        (their estimate of this frame is dropped) and blobs entering the image start tracks.
 
         Parameters
         ----------
@@ -531,6 +649,8 @@ class Tracker:
             self._image_shape = image.shape[:2]
             height, width = self._image_shape
             self._motion = ConstantVelocity(self.config.motion, bounds=(width, height))
+            if self.config.initiation is not None:
+                self.initiator = Initiator(self.config.initiation, self._image_shape)
         elif image.shape[:2] != self._image_shape:
             raise TrackingError(f"frame {frame} has size {image.shape[:2]}, the first had {self._image_shape}")
         self._last_frame = frame
@@ -538,9 +658,17 @@ class Tracker:
             self.remove_target(target.id)
         foreground = self.background.apply(image) if self.background is not None else None
         estimates = self._filter(frame, image, foreground) if self.targets else []
-        for target in self.init.births(frame):
-            born = self.add_target(target, image, foreground)
-            estimates.append(born)
+        for target in self.init.births(frame) if self.init is not None else []:
+            estimates.append(self.add_target(target, image, foreground))
+        if self.initiator is not None:
+            boxes = {e.id: e.box for e in estimates}
+            births, deaths = self.initiator.update(foreground, boxes)
+            for target_id in deaths:
+                self.remove_target(target_id)
+            estimates = [e for e in estimates if e.id not in set(deaths)]
+            for box in births:
+                born = TargetInit(self._next_id, frame, None, tuple(float(v) for v in box))
+                estimates.append(self.add_target(born, image, foreground))
         return estimates
 
     def _filter(self, frame: int, image: np.ndarray, foreground: np.ndarray | None) -> list[Estimate]:
@@ -561,42 +689,94 @@ class Tracker:
                           centres=self._location_centres(),
                           sizes=np.array([t.size for t in self.targets]),
                           previous_particles=previous)
-        # W-S3: every cue scores every particle against θ_1..θ_τ, FA; fusion weighs them.
+        # W-S3: every cue scores every particle against θ_1..θ_τ, FA.
         scores = [cue.log_likelihoods(obs, states, owner) for cue in self.cues]
         if self._fusion is None or self._fusion.n_targets != tau:
             self._fusion = CueFusion(tau, self._fusion_config)
         result = self._fusion.fuse(scores, owner)
-        weights = np.nan_to_num(np.asarray(result.weights, dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0)
-        weights = np.maximum(weights, 0.0)
-        with np.errstate(divide="ignore"):
-            log_weights = np.log(weights)                                                # 0 → -inf
-        bel = result.bel
-        r = result.inconsistency
+        own = np.stack([s[np.arange(owner.size), owner] for s in scores], axis=1)       # (P, c)
+        adaptive = config.adaptive_fusion
+        spreads = feature_spreads(states[:, [CX, CY]], own, owner, tau, self._feature_rng, keep=adaptive.keep,
+                                  epsilon=adaptive.epsilon)                              # C (11)
+        confidences = feature_confidences(spreads, feature_entropies(own, owner, tau),
+                                          epsilon=adaptive.epsilon)                      # C (12)–(13)
+        log_weights = self._log_weights(result, own, owner, confidences)
         per_target = {
             "mean_m_target": _means(result.singleton_mass, owner, counts),
             "mean_m_intersection": _means(result.intersection_mass, owner, counts),
-            "mean_bel": _means(bel, owner, counts),
+            "mean_bel": _means(result.bel, owner, counts),
             "mean_m_empty": _means(result.empty_mass, owner, counts),
-            "mean_r": _means(r, owner, counts),
+            "mean_r": _means(result.inconsistency, owner, counts),
         }
-        n_next = config.particles
-        if config.adaptive:
-            n_next = adaptive_count(float(np.clip(r.mean(), 0.0, 1.0)), math.ceil(config.particles / 2),
-                                    config.particles)
+        kappa = per_target["mean_r"] if config.kappa == "r" else \
+            per_target["mean_m_intersection"] + per_target["mean_m_empty"]
         estimates = []
+        weighted_sets = []
         starts = np.concatenate([[0], np.cumsum(counts)])
         for j, (target, particles) in enumerate(zip(self.targets, moved)):
             weighted = particles.reweight(log_weights[starts[j]:starts[j + 1]])          # normalised in the set
-            state = weighted.estimate()                                                  # W-S4, W (6)
+            target.estimate = weighted.estimate()                                        # W-S4, W (6)
+            weighted_sets.append(weighted)
+        similarity, occluded = self._follow_appearance(obs, confidences)                # C (15), C (16)
+        for j, (target, weighted) in enumerate(zip(self.targets, weighted_sets)):
             diagnostics = {name: float(values[j]) for name, values in per_target.items()}
             diagnostics["particles"] = float(len(weighted))
             diagnostics["ess"] = weighted.ess()
+            diagnostics["similarity"] = float(similarity[j])
+            diagnostics["occluded"] = float(occluded[j])
+            for k, name in enumerate(config.cues):
+                diagnostics[f"confidence_{name}"] = float(confidences[j, k])
+            n_next = None
+            if config.adaptive_particles:
+                n_next = adaptive_count(float(np.clip(kappa[j], 0.0, 1.0)), math.ceil(config.particles / 2),
+                                        config.particles)
             target.particles = weighted.resample(self.rng, method=config.resampling,     # W-S5
-                                                 threshold=config.ess_threshold,
-                                                 n=n_next if config.adaptive else None)
-            target.estimate = state
+                                                 threshold=config.ess_threshold, n=n_next)
+            target.similarity, target.occluded = float(similarity[j]), bool(occluded[j])
+            state = target.estimate
             estimates.append(Estimate(frame, target.id, state.copy(), self._box(target, state), diagnostics))
         return estimates
+
+    def _log_weights(self, result, own: np.ndarray, owner: np.ndarray, confidences: np.ndarray) -> np.ndarray:
+        """Log-weights of the particles under the configured fusion strategy, shape (P,)."""
+        fusion, tau = self.config.fusion, len(self.targets)
+        if fusion == "sum":
+            return fuse_sum(own, owner, tau)
+        if fusion == "product":
+            return fuse_product(own, owner, tau)
+        if fusion == "adaptive":
+            previous = np.array([t.similarity for t in self.targets])
+            return fuse_adaptive(own, owner, tau, confidences, previous,
+                                 mix_norm=self.config.adaptive_fusion.mix_norm)             # C (14)
+        weights = np.nan_to_num(np.asarray(result.weights, dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0)
+        with np.errstate(divide="ignore"):
+            return np.log(np.maximum(weights, 0.0))                                       # 0 → -inf
+
+    def _follow_appearance(self, obs: Observation, confidences: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Total similarity ρ_t at the new estimates (C (15)), the occlusion flags, and C (16).
+
+        ρ_{i,t} = ρ[p_i(x̂_t), q̂_{i,t−1}] for every appearance cue i, weighted by the cues'
+        confidences renormalised over the appearance cues; without one ρ_t = 1.  The templates
+        are updated when ``config.updates_templates``, and kept while a target is occluded.
+        """
+        tau = len(self.targets)
+        columns = [k for k, cue in enumerate(self.cues) if isinstance(cue, AppearanceCue)]
+        if not columns:
+            return np.ones(tau), np.zeros(tau, dtype=bool)
+        hat = np.array([t.estimate for t in self.targets])      # their log-scales follow the perspective model
+        index = np.arange(tau)
+        current = [self.cues[k].histograms(obs, hat, index) for k in columns]                # each (τ, B)
+        rho = np.stack([_row_similarity(p, self.cues[k].templates) for p, k in zip(current, columns)], axis=1)
+        similarity = total_similarity(confidences[:, columns], rho)
+        flags = occluded(similarity, self.config.adaptive_fusion.threshold)
+        if self.config.updates_templates:
+            for p, k in zip(current, columns):
+                cue = self.cues[k]
+                updated = update_templates(cue.initial_templates, cue.templates, p, flags,
+                                           variant=self.config.adaptive_fusion.update)
+                for j in range(tau):
+                    cue.replace_template(j, updated[j])
+        return similarity, flags
 
     def _location_centres(self) -> np.ndarray:
         """The t − 1 centres, moved on by their velocities if the location cue asks so, shape (τ, 2)."""
@@ -609,6 +789,11 @@ class Tracker:
     def _box(target: _Target, state: np.ndarray) -> tuple[float, float, float, float]:
         w, h = target.size * math.exp(float(np.clip(state[LOG_SCALE], -30.0, 30.0)))
         return (float(state[CX] - w / 2.0), float(state[CY] - h / 2.0), float(w), float(h))
+
+
+def _row_similarity(histograms: np.ndarray, templates: np.ndarray) -> np.ndarray:
+    """ρ[h_j, q_j] row by row (C (9)), shape (τ,)."""
+    return np.clip(np.sqrt(np.maximum(histograms, 0.0) * templates).sum(axis=1), 0.0, 1.0)
 
 
 def _means(values: np.ndarray, owner: np.ndarray, counts: np.ndarray) -> np.ndarray:
@@ -651,7 +836,7 @@ class Summary:
                 "files": {k: str(v) for k, v in self.files.items()}}
 
 
-def run(source, init: InitPlan, config: TrackerConfig = TrackerConfig(), out_dir: str | PathLike[str] = "track",
+def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), out_dir: str | PathLike[str] = "track",
         seed: int = 0, write_video: bool = True, progress: bool = True, gt: np.ndarray | str | None = None,
         extra_outputs: dict | None = None) -> Summary:
     """Track ``source`` and write the outputs into ``out_dir``.
@@ -660,9 +845,12 @@ def run(source, init: InitPlan, config: TrackerConfig = TrackerConfig(), out_dir
     ----------
     source : path, Scene or ndarray of uint8, shape (T, H, W, 3)
         A video file (decoded with OpenCV), a rendered synthetic scene, or frames.
-    init : InitPlan
-        Births and deaths of the targets (:func:`init_from_gt`, :func:`read_init_boxes`).
+    init : InitPlan or None
+        Births and deaths of the targets (:func:`init_from_gt`, :func:`read_init_boxes`);
+        None leaves them all to the automatic initiation (``config.initiation``).
     config : TrackerConfig
+        With ``config.warm_up`` > 0 the background model first learns from that many frames
+        spread over the whole source (a video file is then decoded twice).
     out_dir : path
         Receives ``tracks.txt``, ``diagnostics.csv``, ``diagnostics.png``, ``annotated.avi``
         (unless ``write_video`` is false) and ``summary.json``, written last.
@@ -695,10 +883,12 @@ def run(source, init: InitPlan, config: TrackerConfig = TrackerConfig(), out_dir
 
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise TrackingError(f"the seed must be a non-negative integer, got {seed!r}")
-    if not isinstance(init, InitPlan):
-        raise TrackingError(f"init must be an InitPlan, got {type(init).__name__}")
+    if init is not None and not isinstance(init, InitPlan):
+        raise TrackingError(f"init must be an InitPlan or None, got {type(init).__name__}")
     if not isinstance(config, TrackerConfig):
         raise TrackingError(f"config must be a TrackerConfig, got {type(config).__name__}")
+    if init is None and config.initiation is None:
+        raise InitError("nothing to track: give an init plan or turn on the automatic initiation")
     started = time.perf_counter()
     reader = None
     if isinstance(source, (str, PathLike)):
@@ -718,7 +908,8 @@ def run(source, init: InitPlan, config: TrackerConfig = TrackerConfig(), out_dir
     if gt is not None:
         gt_rows = read_mot(gt) if isinstance(gt, (str, PathLike)) else np.asarray(gt, dtype=np.float64)
     try:
-        init.check_image(width, height)
+        if init is not None:
+            init.check_image(width, height)
         staged = outputs.StagedOutputs(out_dir)
     except BaseException:
         if reader is not None:
@@ -727,6 +918,8 @@ def run(source, init: InitPlan, config: TrackerConfig = TrackerConfig(), out_dir
     try:
         rng = np.random.default_rng(int(seed))
         tracker = Tracker(config, init, rng)
+        if config.warm_up > 0 and tracker.background is not None:
+            tracker.warm_up(_spread_frames(source, frames, total, config.warm_up))
         writer = AnnotatedVideoWriter(staged.path("annotated.avi"), fps) if write_video else None
         rows: list[list[float]] = []
         records: list[dict[str, float]] = []
@@ -761,9 +954,11 @@ def run(source, init: InitPlan, config: TrackerConfig = TrackerConfig(), out_dir
             raise TrackingError(f"{source_name}: no frame to track")
         tracks = np.array(rows, dtype=np.float64).reshape(-1, 10)
         outputs.write_tracks(staged.path("tracks.txt"), rows)
-        outputs.write_diagnostics(staged.path("diagnostics.csv"), records)
+        outputs.write_diagnostics(staged.path("diagnostics.csv"), records,
+                                  ("frame", "id") + tracker.diagnostic_columns)
         outputs.plot_diagnostics(staged.path("diagnostics.png"), records,
-                                 title=f"{source_name}: rule {config.rule}, weight {config.weight}")
+                                 title=f"{source_name}: {_strategy(config)}",
+                                 threshold=config.adaptive_fusion.threshold)
         for name, write in (extra_outputs or {}).items():
             write(staged.path(name))
         scores = evaluate(gt_rows, tracks) if gt_rows is not None else None
@@ -775,13 +970,13 @@ def run(source, init: InitPlan, config: TrackerConfig = TrackerConfig(), out_dir
         summary = {
             "source": source_name,
             "frames": count,
-            "targets": len(init.targets),
+            "targets": len({int(row[1]) for row in rows}),
             "track_rows": len(rows),
             "fps": {"tracking": tracking_fps, "overall": overall_fps,
                     "decoding_seconds": reader.decode_seconds if reader is not None else 0.0,
                     "tracking_seconds": tracking_seconds, "overall_seconds": overall},
             "seed": int(seed),
-            "init": init.source,
+            "init": init.source if init is not None else "automatic initiation",
             "parameters": asdict(config),
             "version": __version__,
             "scores": scores.to_dict() if scores is not None else None,
@@ -795,3 +990,31 @@ def run(source, init: InitPlan, config: TrackerConfig = TrackerConfig(), out_dir
         if reader is not None:
             reader.close()
     return Summary(count, tracking_fps, overall_fps, tracks, scores, files)
+
+
+def _strategy(config: TrackerConfig) -> str:
+    """How the particles are weighed, for titles."""
+    if config.fusion == "belief":
+        return f"rule {config.rule}, weight {config.weight}"
+    return f"{config.fusion} fusion"
+
+
+def _spread_frames(source, frames, total: int | None, count: int):
+    """Up to ``count`` frames spread evenly over a video file or an array of frames (the first ones if
+    the length is unknown)."""
+    if total:
+        picks = set(np.linspace(0, total - 1, num=min(count, total)).round().astype(int).tolist())
+    else:
+        picks = set(range(count))
+    if not isinstance(source, (str, PathLike)):
+        return (frames[k] for k in sorted(picks))
+    from plugins.video_tracking.video import VideoReader
+
+    def read():
+        with VideoReader(source) as reader:
+            for k, image in enumerate(reader):
+                if k in picks:
+                    yield image
+                if k >= max(picks):
+                    break
+    return read()

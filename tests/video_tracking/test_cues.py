@@ -384,12 +384,12 @@ def test_cue_outputs_feed_the_fusion():
 
 
 def test_registry_builds_every_cue():
-    assert set(CUES) == {"colour", "location", "foreground"}
+    assert set(CUES) == {"colour", "location", "foreground", "edges"}
     assert make_cue("colour", bins=4, sigma=0.2).config == ColourConfig(bins=4, sigma=0.2)
     assert isinstance(make_cue("foreground"), ForegroundColourCue)
     assert isinstance(make_cue("colour"), AppearanceCue) and not isinstance(make_cue("location"), AppearanceCue)
-    with pytest.raises(UnknownCueError, match="known cues: colour, location, foreground"):
-        make_cue("edges")
+    with pytest.raises(UnknownCueError, match="known cues: colour, location, foreground, edges"):
+        make_cue("sound")
     with pytest.raises(TrackingError, match="no option bins; its options are sigma, fa_mode"):
         make_cue("location", bins=3)
 

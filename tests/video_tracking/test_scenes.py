@@ -22,6 +22,7 @@ from plugins.video_tracking.scenes import (
     Walker,
     crossing,
     demo,
+    entering_leaving,
     illumination,
     partial_occlusion,
     render,
@@ -330,6 +331,35 @@ def test_the_demo_scene_is_small_and_has_a_full_occlusion_and_a_light_change(ren
     assert config.lighting.shadows and config.occluders
 
 
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_entering_leaving_walkers_come_in_and_go_out_at_the_documented_frames(rendered, seed):
+    scene = rendered["entering_leaving"] if seed == 0 else render(entering_leaving(seed))
+    config = scene.config
+    assert (config.width, config.height, len(scene)) == (320, 240, 200)
+    assert scene.boxes_at(0) == {} and not np.any(scene.ground_truth[:, 0] <= 5)  # frames 0-4 are empty
+    documented = {1: (5, 139, "left"), 2: (20, 167, "right"), 3: (40, 177, "left")}
+    for walker_id, (first, last, entry_side) in documented.items():
+        frames, boxes, visibility = track_of(scene, walker_id)
+        assert (frames[0], frames[-1]) == (first, last)
+        assert np.array_equal(frames, np.arange(first, last + 1))  # in view without a gap
+        assert np.all(visibility == 1.0)  # nobody ever overlaps anybody
+        right_edges = boxes[:, 0] + boxes[:, 2]
+        enters_left = boxes[0, 0] == 0 and right_edges[-1] == config.width
+        enters_right = right_edges[0] == config.width and boxes[-1, 0] == 0
+        assert enters_left if entry_side == "left" else enters_right
+        assert 1.5 <= abs(next(w for w in config.walkers if w.id == walker_id).velocity[0]) <= 2.5
+    assert len(scene.ground_truth) == sum(last - first + 1 for first, last, _ in documented.values())
+    last_frame = len(scene) - 1
+    assert sum(last <= last_frame - 20 for _, last, _ in documented.values()) == 3
+    # bands of rows that do not meet, and clothes of clearly different colours
+    bands = sorted((w.box_at(w.first_frame)[1], w.box_at(w.first_frame)[1] + w.box_at(w.first_frame)[3])
+                   for w in config.walkers)
+    assert all(top_of_next >= bottom for (_, bottom), (top_of_next, _) in zip(bands, bands[1:]))
+    shirts = np.array([w.shirt for w in config.walkers], dtype=float)
+    assert min(np.abs(a - b).max() for i, a in enumerate(shirts) for b in shirts[i + 1:]) > 100
+    assert len({tuple(c // 32) for c in shirts.astype(int)}) == 3  # three bins of an 8 x 8 x 8 histogram
+
+
 # -- files ---------------------------------------------------------------------------------------------
 
 def test_ground_truth_file_round_trip(rendered, tmp_path):
@@ -411,7 +441,8 @@ def test_bad_configurations_are_rejected(make):
 
 
 def test_presets_are_registered_and_carry_their_seed():
-    assert set(PRESETS) == {"crossing", "similar_colours", "partial_occlusion", "illumination", "scale_change", "demo"}
+    assert set(PRESETS) == {"crossing", "similar_colours", "partial_occlusion", "illumination", "scale_change", "demo",
+                            "entering_leaving"}
     for name, make in PRESETS.items():
         config = make(5)
         assert config.seed == 5 and config.name == name

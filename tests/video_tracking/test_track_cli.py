@@ -67,7 +67,7 @@ def test_bad_input_is_one_line_and_leaves_no_output(tmp_path, capsys, case):
     elif case == "empty init":
         boxes.write_text("")
     elif case == "unknown cue":
-        argv += ["--cues", "colour,edges"]
+        argv += ["--cues", "colour,sound"]
     else:
         argv += ["--rule", "no_such_rule"]
     out = tmp_path / "out"

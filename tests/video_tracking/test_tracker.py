@@ -129,8 +129,8 @@ def test_other_rules_run(crossing_scene, rule):
 
 
 def test_config_rejects_bad_settings():
-    with pytest.raises(UnknownCueError, match="edges"):
-        TrackerConfig(cues=("colour", "edges"))
+    with pytest.raises(UnknownCueError, match="sound"):
+        TrackerConfig(cues=("colour", "sound"))
     with pytest.raises(TrackingError, match="no_such_rule"):
         TrackerConfig(rule="no_such_rule")
     with pytest.raises(TrackingError, match="twice"):
