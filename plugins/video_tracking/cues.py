@@ -258,6 +258,10 @@ class AppearanceCue(Cue, Protocol):
         """Replace the current template of target ``index`` (normalised to sum 1)."""
         ...
 
+    def rebuild_template(self, index: int, image: np.ndarray, box, foreground: np.ndarray | None = None) -> None:
+        """Take target ``index``'s current and initial template anew from ``box`` in ``image``."""
+        ...
+
 
 # -- configuration checks -------------------------------------------------------------------------
 def _positive(owner: str, name: str, value) -> float:
@@ -448,8 +452,10 @@ def orientation_bins(image: np.ndarray, bins: int = 16, unsigned: bool = False,
     (borders replicated), x to the right and y *down*; the orientation θ = atan2(g_y, g_x),
     taken in [0, 2π) (in [0, π) when ``unsigned``, so that opposite gradients share a bin),
     is cut into ``bins`` equal bins starting at 0, and the weight is the magnitude
-    g = √(g_x² + g_y²) where g ≥ ``min_gradient`` and 0 elsewhere.  A step of s grey levels
-    gives g = 4s on each side of it.
+    g = √(g_x² + g_y²) where g ≥ ``min_gradient`` and 0 elsewhere.  The Sobel sums are
+    divided by 4, the sum of a kernel's positive taps, so that g is in grey levels: a step of
+    s grey levels gives g = s on each side of it, and the default threshold of 10 keeps the
+    steps of 10 levels or more while the sensor noise of a few levels stays out.
 
     Parameters
     ----------
@@ -472,15 +478,15 @@ def orientation_bins(image: np.ndarray, bins: int = 16, unsigned: bool = False,
     Examples
     --------
     A dark left half and a bright right half (grey 200): the gradient points right,
-    θ = 0, bin 0, and the two columns beside the step get g = 4 · 200:
+    θ = 0, bin 0, and the two columns beside the step get g = 200:
 
     >>> image = np.zeros((3, 4, 3), np.uint8)
     >>> image[:, 2:] = 200
     >>> bin_image, weights = orientation_bins(image)
     >>> weights
-    array([[  0., 800., 800.,   0.],
-           [  0., 800., 800.,   0.],
-           [  0., 800., 800.,   0.]])
+    array([[  0., 200., 200.,   0.],
+           [  0., 200., 200.,   0.],
+           [  0., 200., 200.,   0.]])
     >>> bin_image[weights > 0]
     array([0, 0, 0, 0, 0, 0])
 
@@ -503,7 +509,7 @@ def orientation_bins(image: np.ndarray, bins: int = 16, unsigned: bool = False,
     gx = across[:-2] + 2.0 * across[1:-1] + across[2:]
     smooth = left + 2.0 * padded[:, 1:-1] + right
     gy = smooth[2:] - smooth[:-2]
-    magnitude = np.sqrt(gx * gx + gy * gy)                # np.hypot and np.mod are several times slower
+    magnitude = 0.25 * np.sqrt(gx * gx + gy * gy)         # np.hypot and np.mod are several times slower
     period = np.pi if unsigned else 2.0 * np.pi
     # In turns, the axis directions (±π/2, π, …) are exact multiples of 1/4, so they do not
     # fall on the wrong side of a bin boundary by rounding.
@@ -899,6 +905,19 @@ class ColourCue:
         self._initial = np.delete(self._initial, index, axis=0)
         self._shared = False
 
+    def rebuild_template(self, index: int, image: np.ndarray, box, foreground: np.ndarray | None = None) -> None:
+        """Take target ``index``'s template, current and initial, anew from ``box`` in ``image``.
+
+        For a target first seen only in part (entering the image), once all of it is in view.
+        """
+        index = self._target_index(index, "rebuild the template of")
+        template = self._build_templates(image, np.reshape(np.asarray(box, dtype=np.float64), (1, -1)), foreground)
+        if self._shared:
+            self._templates, self._shared = self._templates.copy(), False
+        self._templates[index] = template[0]
+        self._initial = self._initial.copy()
+        self._initial[index] = template[0]
+
     def replace_template(self, index: int, histogram) -> None:
         """Make ``histogram``, normalised to sum 1, the current template of target ``index``.
 
@@ -1072,7 +1091,8 @@ class EdgeConfig:
     samples : (int, int)
         Sample points across and down a box (:func:`kernel_grid`).
     min_gradient : float
-        Pixels with a Sobel magnitude below this are ignored (SPEC: 10; ≥ 0).
+        Pixels whose gradient, in grey levels (:func:`orientation_bins`), is below this are
+        ignored (SPEC: 10; ≥ 0).
     unsigned : bool
         Orientations in [0, π) instead of [0, 2π): an edge counts the same whichever side is
         brighter.

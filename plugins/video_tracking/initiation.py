@@ -104,6 +104,12 @@ class InitiationConfig:
     first_frame : bool
         Whether every blob of the first frame given to :meth:`Initiator.update` starts a
         track at once, anywhere in the image (L's module 2; default True).
+    duplicate_iou : float
+        Two tracks whose boxes overlap with at least this IoU follow the same person ...
+    duplicate_frames : int or None
+        ... and when they do so for this many consecutive frames, the younger one (the
+        larger id) ends (default 0.5 and 15 frames, longer than two people take to cross);
+        None disables the rule.
 
     Raises
     ------
@@ -129,6 +135,8 @@ class InitiationConfig:
     exit_foreground: float = 0.1
     lost_frames: int | None = 25
     first_frame: bool = True
+    duplicate_iou: float = 0.5
+    duplicate_frames: int | None = 15
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "border", _integer("border", self.border, 0))
@@ -141,6 +149,9 @@ class InitiationConfig:
                            _fraction("exit_foreground", self.exit_foreground, allow_zero=False))
         if self.lost_frames is not None:
             object.__setattr__(self, "lost_frames", _integer("lost_frames", self.lost_frames, 1))
+        object.__setattr__(self, "duplicate_iou", _fraction("duplicate_iou", self.duplicate_iou, allow_zero=False))
+        if self.duplicate_frames is not None:
+            object.__setattr__(self, "duplicate_frames", _integer("duplicate_frames", self.duplicate_frames, 1))
         if not isinstance(self.first_frame, (bool, np.bool_)):
             raise TrackingError(f"InitiationConfig.first_frame must be True or False, got {self.first_frame!r}")
         object.__setattr__(self, "first_frame", bool(self.first_frame))
@@ -409,8 +420,10 @@ class Initiator:
         self._frames_seen = 0
         self._candidates = np.zeros((0, 4))
         self._candidate_counts = np.zeros(0, dtype=np.intp)
+        self._blobs = np.zeros((0, 4))
         self._exit_counts: dict[int, int] = {}
         self._lost_counts: dict[int, int] = {}
+        self._twin_counts: dict[int, int] = {}
 
     @property
     def frames_seen(self) -> int:
@@ -422,12 +435,23 @@ class Initiator:
         """The appearance candidates after the last frame: ``(blob box, consecutive frames seen)``."""
         return [(tuple(float(v) for v in box), int(n)) for box, n in zip(self._candidates, self._candidate_counts)]
 
+    @property
+    def blobs(self) -> np.ndarray:
+        """The foreground blobs of the last frame given to :meth:`update`, shape (n, 4) (a copy)."""
+        return self._blobs.copy()
+
+    def touches_border(self, boxes) -> np.ndarray:
+        """Whether each box ``(x, y, w, h)`` reaches into the border zone, shape (n,)."""
+        return self._in_border_zone(np.asarray(boxes, dtype=np.float64).reshape(-1, 4))
+
     def reset(self) -> None:
         """Forget every candidate and counter, as if no frame had been given."""
         self._frames_seen = 0
         self._candidates = np.zeros((0, 4))
         self._candidate_counts = np.zeros(0, dtype=np.intp)
+        self._blobs = np.zeros((0, 4))
         self._exit_counts.clear()
+        self._twin_counts.clear()
         self._lost_counts.clear()
 
     def update(self, mask: np.ndarray, tracks: dict[int, Box]) -> tuple[list[Box], list[int]]:
@@ -459,6 +483,7 @@ class Initiator:
         self._frames_seen += 1
 
         blobs = foreground_blobs(mask, self.min_area_pixels, self.config.opening)
+        self._blobs = blobs
         free = ~self._covered(blobs, boxes)
         if first and self.config.first_frame:
             births = blobs[free]
@@ -545,13 +570,19 @@ class Initiator:
         centre_x = boxes[:, 0] + boxes[:, 2] / 2
         centre_y = boxes[:, 1] + boxes[:, 3] / 2
         at_border = (centre_x < b) | (centre_x >= width - b) | (centre_y < b) | (centre_y >= height - b)
-        exit_counts, lost_counts, deaths = {}, {}, []
+        # ids are sorted, so an older track (smaller id) comes first: a duplicate is a track
+        # that overlaps an older one.
+        overlaps = iou(boxes, boxes) if len(ids) else np.zeros((0, 0))
+        duplicate = np.array([(overlaps[k, :k] >= config.duplicate_iou).any() for k in range(len(ids))], dtype=bool)
+        exit_counts, lost_counts, twin_counts, deaths = {}, {}, {}, []
         for k, track_id in enumerate(ids):
             leaving = self._exit_counts.get(track_id, 0) + 1 if empty[k] and at_border[k] else 0
             lost = self._lost_counts.get(track_id, 0) + 1 if empty[k] else 0
-            if leaving >= config.exit_frames or (config.lost_frames is not None and lost >= config.lost_frames):
+            twin = self._twin_counts.get(track_id, 0) + 1 if duplicate[k] else 0
+            if leaving >= config.exit_frames or (config.lost_frames is not None and lost >= config.lost_frames) \
+                    or (config.duplicate_frames is not None and twin >= config.duplicate_frames):
                 deaths.append(track_id)
             else:
-                exit_counts[track_id], lost_counts[track_id] = leaving, lost
-        self._exit_counts, self._lost_counts = exit_counts, lost_counts
+                exit_counts[track_id], lost_counts[track_id], twin_counts[track_id] = leaving, lost, twin
+        self._exit_counts, self._lost_counts, self._twin_counts = exit_counts, lost_counts, twin_counts
         return deaths

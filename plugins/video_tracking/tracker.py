@@ -58,7 +58,7 @@ from plugins.video_tracking.cues import (
 from plugins.video_tracking.errors import InitError, TrackingError, UnknownCueError
 from plugins.video_tracking.evaluation import read_mot
 from plugins.video_tracking.fusion import WEIGHTS, CueFusion, FusionConfig
-from plugins.video_tracking.initiation import InitiationConfig, Initiator
+from plugins.video_tracking.initiation import InitiationConfig, Initiator, iou
 from plugins.video_tracking.particles import (
     CX,
     CY,
@@ -516,6 +516,7 @@ class _Target:
     birth_cy: float = 0.0     # centre row of the birth box, the reference of the perspective scale
     similarity: float = 0.8   # total similarity ρ_{t−1} of C (15), ρ_0 at birth
     occluded: bool = False
+    growing: bool = False     # born in part at the image border: its size follows its blob until all is in
 
 
 class Tracker:
@@ -584,8 +585,16 @@ class Tracker:
         self.diagnostic_columns = diagnostic_columns(config.cues)
 
     # -- births and deaths --------------------------------------------------------------------
-    def add_target(self, target: TargetInit, image: np.ndarray, foreground: np.ndarray | None = None) -> Estimate:
-        """Start tracking ``target`` at its box in ``image`` (W-S1); returns its first estimate."""
+    def add_target(self, target: TargetInit, image: np.ndarray, foreground: np.ndarray | None = None,
+                   growing: bool = False, planned: bool = True) -> Estimate:
+        """Start tracking ``target`` at its box in ``image`` (W-S1); returns its first estimate.
+
+        ``growing`` marks a target seen only in part, entering at the image border: until its
+        foreground blob leaves the border zone the blob gives its size, and then its templates
+        are taken anew (needs the automatic initiation, which finds the blobs).  A target
+        that is not ``planned`` (found by the initiation) does not enter the fit of the
+        perspective model.
+        """
         if any(t.id == target.id for t in self.targets):
             raise InitError(f"target {target.id} is already being tracked")
         height, width = image.shape[:2]
@@ -598,8 +607,11 @@ class Tracker:
         states = initialise(centre, self.config.particles, self.rng, sigma_pos=self.config.init_sigma)
         estimate = np.array([centre[0], centre[1], 0.0, 0.0, 0.0])
         self.targets.append(_Target(target.id, target.last_frame, np.array([w, h]), ParticleSet(states), estimate,
-                                    birth_cy=centre[1], similarity=self.config.adaptive_fusion.rho0))
-        if self.config.scale == "perspective":
+                                    birth_cy=centre[1], similarity=self.config.adaptive_fusion.rho0,
+                                    growing=bool(growing) and self.config.initiation is not None))
+        # Blob boxes are too rough (merged groups, shadows, missing legs) to fit the ground
+        # plane on: only the boxes of planned births (by hand or from a ground truth) are used.
+        if self.config.scale == "perspective" and planned:
             self._birth_boxes.append(target.box)
             self.perspective = PerspectiveScale.fit(self._birth_boxes)
         self._next_id = max(self._next_id, target.id + 1)
@@ -666,10 +678,39 @@ class Tracker:
             for target_id in deaths:
                 self.remove_target(target_id)
             estimates = [e for e in estimates if e.id not in set(deaths)]
-            for box in births:
+            self._grow(image, foreground)
+            partial = self.initiator.touches_border(births) if births else []
+            for box, growing in zip(births, partial):
                 born = TargetInit(self._next_id, frame, None, tuple(float(v) for v in box))
-                estimates.append(self.add_target(born, image, foreground))
+                estimates.append(self.add_target(born, image, foreground, growing=growing, planned=False))
         return estimates
+
+    def _grow(self, image: np.ndarray, foreground: np.ndarray) -> None:
+        """Targets entering the image take the size and centre of their blob until all of it is in view."""
+        blobs = self.initiator.blobs
+        if not len(blobs):
+            return
+        for index, target in enumerate(self.targets):
+            if not target.growing:
+                continue
+            overlap = iou(np.array([self._box(target, target.estimate)]), blobs)[0]
+            best = int(np.argmax(overlap))
+            if overlap[best] <= 0:
+                continue
+            x, y, w, h = blobs[best]
+            centre = np.array([x + w / 2.0, y + h / 2.0])
+            shift = np.zeros(target.particles.states.shape[1])
+            shift[[CX, CY]] = centre - target.estimate[[CX, CY]]
+            target.particles = ParticleSet(target.particles.states + shift, target.particles.log_weights)
+            target.estimate = target.estimate + shift
+            target.size = np.array([w, h])
+            target.birth_cy = float(centre[1])
+            if self.initiator.touches_border(blobs[best])[0]:
+                continue
+            target.growing = False
+            for cue in self.cues:
+                if isinstance(cue, AppearanceCue):
+                    cue.rebuild_template(index, image, (x, y, w, h), foreground)
 
     def _filter(self, frame: int, image: np.ndarray, foreground: np.ndarray | None) -> list[Estimate]:
         config = self.config
@@ -680,7 +721,8 @@ class Tracker:
         if self.perspective is not None:
             for k, (target, particles) in enumerate(zip(self.targets, moved)):
                 rescaled = particles.states.copy()
-                rescaled[:, LOG_SCALE] = self.perspective.log_scale(rescaled[:, CY], target.birth_cy)
+                rescaled[:, LOG_SCALE] = 0.0 if target.growing else \
+                    self.perspective.log_scale(rescaled[:, CY], target.birth_cy)
                 moved[k] = ParticleSet(rescaled, particles.log_weights)
         counts = np.array([len(p) for p in moved])
         states = np.concatenate([p.states for p in moved])                              # (P, 5)

@@ -64,9 +64,9 @@ def particles(*centres, log_scale=0.0):
 def test_a_vertical_step_puts_all_weight_in_the_bin_of_its_gradient_direction():
     bins, weights = orientation_bins(step_image(right=200))
     assert bins.dtype == np.intp and weights.dtype == np.float64 and bins.shape == weights.shape == (6, 8)
-    # Sobel: (right − left) · (1 + 2 + 1) on the two columns that touch the step, 0 elsewhere.
+    # Sobel: (right − left) · (1 + 2 + 1) / 4 = 200 on the two columns that touch the step, 0 elsewhere.
     expected = np.zeros((6, 8))
-    expected[:, 3:5] = 800.0
+    expected[:, 3:5] = 200.0
     assert np.array_equal(weights, expected)
     assert (bins[weights > 0] == 0).all()                                   # θ = 0
     mirrored_bins, mirrored = orientation_bins(step_image(left=200, right=0))
@@ -77,7 +77,7 @@ def test_a_vertical_step_puts_all_weight_in_the_bin_of_its_gradient_direction():
 def test_a_horizontal_step_points_down_or_up_with_y_growing_downwards():
     down = grey_image(np.where(np.arange(6)[:, None] >= 3, 150, 10) * np.ones((1, 5), int))
     bins, weights = orientation_bins(down)
-    assert np.array_equal(weights[2:4], np.full((2, 5), 560.0)) and not weights[[0, 1, 4, 5]].any()
+    assert np.array_equal(weights[2:4], np.full((2, 5), 140.0)) and not weights[[0, 1, 4, 5]].any()
     assert (bins[weights > 0] == 4).all()                                    # θ = π/2
     up_bins, up = orientation_bins(down[::-1])
     assert (up_bins[up > 0] == 12).all()                                     # θ = 3π/2
@@ -95,8 +95,8 @@ def test_diagonal_gradients_and_the_unsigned_folding(ramp, signed_bin, unsigned_
     image = grey_image(128 + 8 * ramp(x, y))                                # 32 … 224
     bins, weights = orientation_bins(image, bins=4)                         # bins of π/2: diagonals mid-bin
     inner = (slice(1, -1), slice(1, -1))
-    # A ramp of 8 per pixel: g_x = g_y = ±2 · 8 · 4 = ±64 inside; g = 64√2.
-    assert np.allclose(weights[inner], 64 * math.sqrt(2), rtol=0, atol=1e-12)
+    # A ramp of 8 per pixel: g_x = g_y = ±2 · 8 · 4 / 4 = ±16 inside; g = 16√2.
+    assert np.allclose(weights[inner], 16 * math.sqrt(2), rtol=0, atol=1e-12)
     assert (bins[inner] == signed_bin).all()
     folded, _ = orientation_bins(image, bins=2, unsigned=True)               # bins of π/2 over [0, π)
     assert (folded[inner] == unsigned_bin).all()
@@ -106,18 +106,18 @@ def test_unsigned_orientations_fold_opposite_steps_together():
     rising, falling = step_image(left=0, right=90), step_image(left=90, right=0)
     for image in (rising, falling):
         bins, weights = orientation_bins(image, unsigned=True)
-        assert (bins[weights > 0] == 0).all() and weights.sum() == 6 * 2 * 360.0
+        assert (bins[weights > 0] == 0).all() and weights.sum() == 6 * 2 * 90.0
     down = rising.transpose(1, 0, 2)
     assert (orientation_bins(down, unsigned=True)[0][orientation_bins(down)[1] > 0] == 8).all()   # π/2 of [0, π)
     assert (orientation_bins(down[::-1], unsigned=True)[0][orientation_bins(down)[1][::-1] > 0] == 8).all()
 
 
 def test_weak_gradients_are_cut_at_min_gradient():
-    faint = step_image(left=100, right=102)                                  # g = 4 · 2 = 8
+    faint = step_image(left=100, right=108)                                  # g = 8 grey levels
     assert not orientation_bins(faint)[1].any()
     assert orientation_bins(faint, min_gradient=8.0)[1].max() == 8.0        # kept at exactly the threshold
     assert orientation_bins(faint, min_gradient=0.0)[1].sum() == 6 * 2 * 8.0
-    assert orientation_bins(step_image(left=100, right=103))[1].max() == 12.0
+    assert orientation_bins(step_image(left=100, right=112))[1].max() == 12.0
 
 
 def test_grey_level_weights_the_channels_in_bgr_order():
@@ -125,8 +125,8 @@ def test_grey_level_weights_the_channels_in_bgr_order():
     blue[:, 2:, 0] = 100                                                     # BGR: channel 0 is blue
     red = np.zeros((3, 4, 3), np.uint8)
     red[:, 2:, 2] = 100
-    assert np.allclose(orientation_bins(blue)[1][:, 1:3], 4 * 11.4)
-    assert np.allclose(orientation_bins(red)[1][:, 1:3], 4 * 29.9)
+    assert np.allclose(orientation_bins(blue)[1][:, 1:3], 11.4)
+    assert np.allclose(orientation_bins(red)[1][:, 1:3], 29.9)
 
 
 def test_gradients_match_opencv_sobel_with_replicated_borders():
@@ -136,7 +136,7 @@ def test_gradients_match_opencv_sobel_with_replicated_borders():
     grey = 0.299 * r + 0.587 * g + 0.114 * b
     gx = cv2.Sobel(grey, cv2.CV_64F, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
     gy = cv2.Sobel(grey, cv2.CV_64F, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
-    magnitude = np.hypot(gx, gy)
+    magnitude = np.hypot(gx, gy) / 4.0                                      # in grey levels
     bins, weights = orientation_bins(image, bins=16, min_gradient=0.0)
     assert np.allclose(weights, magnitude, rtol=0, atol=1e-9)
     turns = np.mod(np.arctan2(gy, gx), 2 * np.pi) / (2 * np.pi) * 16
