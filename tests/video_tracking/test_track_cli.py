@@ -127,3 +127,41 @@ def test_readme_main_command_runs_the_tracking_demo(tmp_path, capsys):
     argv[argv.index("--out") + 1] = str(out)
     assert track([*argv[1:], "--particles", "20", "--no-progress"]) == 0
     assert {p.name for p in out.iterdir()} == OUTPUTS
+
+
+def test_a_video_without_init_file_is_tracked_automatically(tmp_path, capsys):
+    scene = scenes.render(scenes.entering_leaving(0))
+    video = tmp_path / "entering.avi"
+    scenes.write_video(video, scene)
+    gt = tmp_path / "gt.txt"
+    scenes.write_gt(gt, scene.ground_truth)
+    out = tmp_path / "auto"
+    assert track([str(video), "--out", str(out), "--gt", str(gt), "--particles", "30", "--no-video",
+                  "--no-progress"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["init"] == "automatic initiation" and summary["parameters"]["warm_up"] == 50
+    assert summary["parameters"]["initiation"]["first_frame"] is True
+    assert summary["targets"] == 3 and summary["scores"]["mota"] >= 0.8
+    assert "MOTA" in capsys.readouterr().out
+
+
+def test_fusion_strategy_edges_and_adaptive_particles_from_the_command_line(tmp_path):
+    out = tmp_path / "adaptive"
+    assert track(["--demo", "--out", str(out), "--particles", "20", "--fusion", "adaptive", "--adaptive-particles",
+                  "--cues", "colour,location,edges", "--no-video", "--no-progress"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    parameters = summary["parameters"]
+    assert parameters["fusion"] == "adaptive" and parameters["adaptive_particles"] is True
+    assert parameters["cues"] == ["colour", "location", "edges"] and parameters["initiation"] is None
+    header = (out / "diagnostics.csv").read_text().splitlines()[0].split(",")
+    assert header[-5:] == ["similarity", "occluded", "confidence_colour", "confidence_location", "confidence_edges"]
+    counts = np.genfromtxt(out / "diagnostics.csv", delimiter=",", names=True)["particles"]
+    assert counts.min() >= 10 and counts.max() <= 20
+
+
+def test_a_negative_warm_up_is_one_line_error(tmp_path, capsys):
+    video = write_video(tmp_path / "v.avi")
+    assert main(["track", str(video), "--out", str(tmp_path / "o"), "--warm-up", "-1"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err == "belief: error: --warm-up must be a non-negative integer, got -1"
+    assert not (tmp_path / "o").exists()
