@@ -677,7 +677,8 @@ class Tracker:
             births, deaths = self.initiator.update(foreground, boxes)
             for target_id in deaths:
                 self.remove_target(target_id)
-            estimates = [e for e in estimates if e.id not in set(deaths)]
+            ended = set(deaths)
+            estimates = [e for e in estimates if e.id not in ended]
             self._grow(image, foreground)
             partial = self.initiator.touches_border(births) if births else []
             for box, growing in zip(births, partial):
