@@ -881,7 +881,7 @@ class Summary:
 
 def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), out_dir: str | PathLike[str] = "track",
         seed: int = 0, write_video: bool = True, progress: bool = True, gt: np.ndarray | str | None = None,
-        extra_outputs: dict | None = None) -> Summary:
+        extra_outputs: dict | None = None, write_plot: bool = True) -> Summary:
     """Track ``source`` and write the outputs into ``out_dir``.
 
     Parameters
@@ -895,8 +895,9 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
         With ``config.warm_up`` > 0 the background model first learns from that many frames
         spread over the whole source (a video file is then decoded twice).
     out_dir : path
-        Receives ``tracks.txt``, ``diagnostics.csv``, ``diagnostics.png``, ``annotated.avi``
-        (unless ``write_video`` is false) and ``summary.json``, written last.
+        Receives ``tracks.txt``, ``diagnostics.csv``, ``diagnostics.png`` (unless
+        ``write_plot`` is false), ``annotated.avi`` (unless ``write_video`` is false) and
+        ``summary.json``, written last.
     seed : int
         Seed of the run's only random generator.
     progress : bool
@@ -905,6 +906,8 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
         Ground truth to score the tracks against (:func:`~plugins.video_tracking.evaluation.evaluate`).
     extra_outputs : dict of str to callable, optional
         Further files ``name -> write(path)``, committed with the others.
+    write_plot : bool
+        Draw ``diagnostics.png`` (repeated runs of an experiment skip it).
 
     Returns
     -------
@@ -999,9 +1002,10 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
         outputs.write_tracks(staged.path("tracks.txt"), rows)
         outputs.write_diagnostics(staged.path("diagnostics.csv"), records,
                                   ("frame", "id") + tracker.diagnostic_columns)
-        outputs.plot_diagnostics(staged.path("diagnostics.png"), records,
-                                 title=f"{source_name}: {_strategy(config)}",
-                                 threshold=config.adaptive_fusion.threshold)
+        if write_plot:
+            outputs.plot_diagnostics(staged.path("diagnostics.png"), records,
+                                     title=f"{source_name}: {_strategy(config)}",
+                                     threshold=config.adaptive_fusion.threshold)
         for name, write in (extra_outputs or {}).items():
             write(staged.path(name))
         scores = evaluate(gt_rows, tracks) if gt_rows is not None else None
