@@ -13,8 +13,10 @@ Every configuration but ``automatic`` is initialised as with ``belief track --in
 particles.  ``automatic`` is ``belief track VIDEO`` with no init file: the background model
 first learns from 50 frames spread over the clip, the blobs of frame 1 become tracks, later
 tracks start on blobs entering at the border and end when they leave (SPEC B.4).  Each run
-is scored by ``plugins.video_tracking.evaluation.evaluate(gt, tracks)`` (IoU >= 0.5;
-ground-truth rows with flag 0 ignored).  The table gives, per configuration, the mean over
+is a cell of ``belief experiment`` (:func:`plugins.video_tracking.experiment.run_cell`), scored
+by ``plugins.video_tracking.evaluation.evaluate(gt, tracks)`` (IoU >= 0.5; ground-truth rows
+with flag 0 ignored), so its figures are those of the comparison study
+(``benchmarks/comparison_study.py``) for the same configuration and seeds.  The table gives, per configuration, the mean over
 the seeds of MOTA, IDF1, the median centre error, the ID switches, the mean particle count
 per target and frame, the share of target-frames flagged as occluded, and the MOTA of each
 seed.
@@ -27,26 +29,22 @@ next to the repository; without it the script says so and exits 0.
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import statistics
 import sys
-import tempfile
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from plugins.video_tracking.evaluation import evaluate, read_mot  # noqa: E402
-from plugins.video_tracking.initiation import InitiationConfig  # noqa: E402
-from plugins.video_tracking.tracker import TrackerConfig, init_from_gt, run  # noqa: E402
+from plugins.video_tracking.experiment import Cell, MethodSpec, SequenceSpec, run_cell  # noqa: E402
 
 DEFAULT_DATA = ROOT.parent / "shared" / "data" / "pets09_s2l1_f0001_0200"
 TARGETS = {"mota": 0.35, "idf1": 0.65, "median_centre_error": 5.0}
-ALL_CUES = ("colour", "location", "foreground", "edges")
+ALL_CUES = ["colour", "location", "foreground", "edges"]
 
-#: name -> (TrackerConfig keywords, automatic initiation?)
+#: name -> (TrackerConfig settings, automatic initiation?)
 CONFIGS: dict[str, tuple[dict, bool]] = {
     "default": ({}, False),                                           # R-weighted rule, colour+location+foreground
     "dempster": ({"rule": "dempster"}, False),
@@ -58,24 +56,23 @@ CONFIGS: dict[str, tuple[dict, bool]] = {
     "sum": ({"fusion": "sum"}, False),
     "template-update": ({"template_update": True}, False),            # default + C (16) with occlusion freeze
     "adaptive-particles": ({"adaptive_particles": True}, False),      # N from 50 to 100 by the conflict
-    "automatic": ({"initiation": InitiationConfig(), "warm_up": 50}, True),
+    "automatic": ({}, True),                                          # no init file: SPEC B.4, 50 warm-up frames
 }
 
 
-def score(data: Path, name: str, seed: int, particles: int) -> dict:
+def cell(data: Path, name: str, seed: int, particles: int) -> Cell:
+    """The run of configuration ``name``, as a cell of ``belief experiment`` (the same code path)."""
     options, automatic = CONFIGS[name]
-    config = TrackerConfig(particles=particles, **options)
-    with tempfile.TemporaryDirectory() as out:
-        run(data / "video.avi", None if automatic else init_from_gt(data / "gt.txt"), config, out_dir=out,
-            seed=seed, write_video=False, progress=False)
-        tracks = read_mot(Path(out) / "tracks.txt")
-        with open(Path(out) / "diagnostics.csv", encoding="ascii") as handle:
-            rows = list(csv.DictReader(handle))
-    scores = evaluate(read_mot(data / "gt.txt"), tracks)
-    return {"name": name, "seed": seed, "mota": scores.mota, "idf1": scores.idf1,
-            "median_centre_error": scores.median_centre_error, "id_switches": scores.id_switches,
-            "particles": statistics.fmean(float(r["particles"]) for r in rows) if rows else float("nan"),
-            "occluded": statistics.fmean(float(r["occluded"]) for r in rows) if rows else float("nan")}
+    sequence = SequenceSpec("PETS09 S2.L1", video=str(data / "video.avi"), gt=str(data / "gt.txt"),
+                            init="automatic" if automatic else "gt")
+    return Cell(sequence, MethodSpec.from_mapping(name, options), seed, (("particles", particles),))
+
+
+def score(data: Path, name: str, seed: int, particles: int) -> dict:
+    row = run_cell(cell(data, name, seed, particles))["row"]
+    return {"name": name, "seed": seed, "mota": row["mota"], "idf1": row["idf1"],
+            "median_centre_error": row["median_centre_error"], "id_switches": row["id_switches"],
+            "particles": row["mean_particles"], "occluded": row["occluded_share"]}
 
 
 def main(argv: list[str] | None = None) -> int:

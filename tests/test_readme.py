@@ -17,6 +17,7 @@ PAGES_WITH_EXAMPLES = {
     "docs/rules.md",
     "docs/tutorials/fusion.md",
     "docs/tutorials/tracking.md",
+    "docs/experiments.md",
 }
 
 PAGES = sorted({"README.md"} | {path.relative_to(ROOT).as_posix() for path in DOCS.rglob("*.md")})

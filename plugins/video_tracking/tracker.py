@@ -719,10 +719,12 @@ class Tracker:
         # W-S2: propagate.  The t − 1 particles (after resampling) give d_max (W (23)).
         previous = np.concatenate([t.particles.states[:, [CX, CY]] for t in self.targets])
         moved = [t.particles.propagate(self._motion, self.rng) for t in self.targets]
-        if self.perspective is not None:
+        if config.scale == "perspective":
+            # Without a fitted model every target keeps its birth size: a random walk on the
+            # scale would drift, since the foreground-masked colour rewards shrinking windows.
             for k, (target, particles) in enumerate(zip(self.targets, moved)):
                 rescaled = particles.states.copy()
-                rescaled[:, LOG_SCALE] = 0.0 if target.growing else \
+                rescaled[:, LOG_SCALE] = 0.0 if target.growing or self.perspective is None else \
                     self.perspective.log_scale(rescaled[:, CY], target.birth_cy)
                 moved[k] = ParticleSet(rescaled, particles.log_weights)
         counts = np.array([len(p) for p in moved])
