@@ -345,9 +345,9 @@ def discussion(result, summary: dict, sequences: list[str], methods: list[str]) 
     if pets_ranked[0] in DSMT_RULES:
         negative = [m for m in methods if mota(pets, m) < 0]
         lines.append(
-            f"**Where the DSmT rules win.** On the real video, with 8 people who meet and part, the {pets_ranked[0]} has "
-            f"the best MOTA ({mota(pets, pets_ranked[0]):.3f}) and {pets_ranked[1]} ({mota(pets, pets_ranked[1]):.3f})"
-            f" comes next. " + (
+            f"**Where the DSmT rules win.** On the real video, with 8 people who meet and part, the best MOTA goes "
+            f"to {pets_ranked[0]} ({mota(pets, pets_ranked[0]):.3f}), the next to {pets_ranked[1]} "
+            f"({mota(pets, pets_ranked[1]):.3f}). " + (
                 "The R-weighted rule splits each local conflict between the two hypotheses, their intersection and "
                 "their union (W (11)-(14)); what lands on θ_j or on an intersection θ_j ∩ θ_k still counts in "
                 "Bel(θ_j), so a particle of target j keeps more of its weight when one cue contradicts the others. "
@@ -423,8 +423,8 @@ def render_page(experiment, result, summary: dict, sequences: list[str], methods
         f"- **Seeds.** {', '.join(map(str, seeds))}: the tracker's only source of randomness. A synthetic scene is "
         "rendered once, with its own fixed seed.",
         "- **Methods.** The belief rules fuse the three cues' mass functions over {θ_1..θ_τ, FA}: the R-weighted "
-        "rule of the tracking paper (`r_rule`, W (7)–(10), the default), DSmC (the free DSm model's conjunctive "
-        "rule), PCR6, DSmH and Dempster's rule. The other strategies do not use masses: `adaptive` mixes the "
+        "rule of the tracking paper (`r_rule`, W (7)–(10), the default), DSmC (the conjunctive rule on D^Θ, which "
+        "keeps the mass of two overlapping targets on their intersection), PCR6, DSmH and Dempster's rule. The other strategies do not use masses: `adaptive` mixes the "
         "product and the sum of the cues' likelihoods with weights from each cue's confidence, tests for "
         "occlusion and updates the templates (C (11)–(16)); `sum` and `product` combine the likelihoods with "
         "equal weights or by their product. `colour only` is the R-weighted rule with the colour cue alone.",
