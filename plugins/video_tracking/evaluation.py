@@ -38,6 +38,7 @@ from plugins.video_tracking.errors import TrackFileError, TrackingError
 __all__ = [
     "MOT_COLUMNS",
     "Scores",
+    "matched_pairs",
     "read_mot",
     "iou_distance",
     "evaluate",
@@ -364,6 +365,94 @@ def _centres(table: np.ndarray) -> np.ndarray:
     return table[:, [_X, _Y]] + table[:, [_W, _H]] / 2.0
 
 
+def _accumulate(gt: Any, hyp: Any, max_iou_distance: float):
+    """The motmetrics accumulator of :func:`evaluate`, the sorted rows, and the dropped hypotheses."""
+    try:
+        import motmetrics
+        from motmetrics.lap import linear_sum_assignment
+    except ImportError as exc:  # pragma: no cover - motmetrics is a dependency
+        raise TrackingError(f"evaluation needs the motmetrics package ({exc})") from None
+
+    gt_rows = _track_table(gt, "the ground truth", allow_empty=False)
+    hyp_rows = _track_table(hyp, "the hypotheses", allow_empty=True)
+    if not (gt_rows[:, _FLAG] != 0).any():
+        raise TrackingError("the ground truth has no scored row (every row has flag 0)")
+
+    gt_rows = gt_rows[np.argsort(gt_rows[:, _FRAME], kind="stable")]
+    hyp_rows = hyp_rows[np.argsort(hyp_rows[:, _FRAME], kind="stable")]
+    frames = np.union1d(gt_rows[:, _FRAME], hyp_rows[:, _FRAME]).astype(int)
+    gt_starts = np.searchsorted(gt_rows[:, _FRAME], frames, side="left")
+    gt_stops = np.searchsorted(gt_rows[:, _FRAME], frames, side="right")
+    hyp_starts = np.searchsorted(hyp_rows[:, _FRAME], frames, side="left")
+    hyp_stops = np.searchsorted(hyp_rows[:, _FRAME], frames, side="right")
+
+    accumulator = motmetrics.MOTAccumulator(auto_id=False)
+    ignored_predictions = 0
+    for frame, g0, g1, h0, h1 in zip(frames, gt_starts, gt_stops, hyp_starts, hyp_stops):
+        frame_gt = gt_rows[g0:g1]
+        frame_hyp = hyp_rows[h0:h1]
+        distance = iou_distance(frame_gt[:, _X:_FLAG], frame_hyp[:, _X:_FLAG], max_iou_distance)
+        scored = frame_gt[:, _FLAG] != 0
+        kept = np.ones(len(frame_hyp), dtype=bool)
+        if not scored.all() and len(frame_hyp):
+            # MOTChallenge protocol: match against all ground truth, drop what matched an ignored box.
+            for i, j in zip(*linear_sum_assignment(distance)):
+                if np.isfinite(distance[i, j]) and not scored[i]:
+                    kept[j] = False
+            ignored_predictions += int((~kept).sum())
+        accumulator.update(
+            frame_gt[scored, _ID].astype(int),
+            frame_hyp[kept, _ID].astype(int),
+            distance[np.ix_(scored, kept)],
+            frameid=int(frame),
+        )
+
+    return accumulator, gt_rows, hyp_rows, ignored_predictions
+
+
+def _pairs(accumulator, gt_rows: np.ndarray, hyp_rows: np.ndarray) -> np.ndarray:
+    """Rows ``frame, gt id, hypothesis id, centre error`` of the pairs of every frame."""
+    # The event table also repeats a pair as a TRANSFER / ASCEND / MIGRATE event; only MATCH
+    # and SWITCH are the pairs of the frame.
+    events = accumulator.mot_events
+    pairs = events[events["Type"].isin(["MATCH", "SWITCH"])]
+    frames = pairs.index.get_level_values("FrameId").to_numpy(dtype=int)
+    gt_ids, hyp_ids = pairs["OId"].to_numpy(dtype=int), pairs["HId"].to_numpy(dtype=int)
+    gt_index = {(int(f), int(i)): k for k, (f, i) in enumerate(gt_rows[:, :2])}
+    hyp_index = {(int(f), int(i)): k for k, (f, i) in enumerate(hyp_rows[:, :2])}
+    gt_pick = np.array([gt_index[(f, o)] for f, o in zip(frames, gt_ids)], dtype=int)
+    hyp_pick = np.array([hyp_index[(f, h)] for f, h in zip(frames, hyp_ids)], dtype=int)
+    errors = np.linalg.norm(_centres(gt_rows[gt_pick]) - _centres(hyp_rows[hyp_pick]), axis=1)
+    return np.column_stack([frames, gt_ids, hyp_ids, errors]).astype(np.float64).reshape(-1, 4)
+
+
+def matched_pairs(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> np.ndarray:
+    """The ground-truth boxes paired with a hypothesis by :func:`evaluate`, with their centre errors.
+
+    Parameters
+    ----------
+    gt, hyp : array_like, shape (N, 6..10) and (M, 6..10)
+        As in :func:`evaluate`.
+    max_iou_distance : float, default 0.5
+        Largest ``1 − IoU`` that still allows a pairing.
+
+    Returns
+    -------
+    ndarray, shape (K, 4)
+        Rows ``frame, gt id, hypothesis id, centre error`` (pixels), one per scored ground-truth
+        box that has a partner in its frame (identity switches included), sorted by frame.
+
+    Examples
+    --------
+    >>> gt = np.array([[1, 1, 0, 0, 10, 20, 1], [2, 1, 0, 0, 10, 20, 1]])
+    >>> hyp = np.array([[1, 7, 0, 3, 10, 20, 1], [2, 7, 20, 0, 10, 20, 1]])   # frame 2: no overlap
+    >>> matched_pairs(gt, hyp)
+    array([[1., 1., 7., 3.]])
+    """
+    accumulator, gt_rows, hyp_rows, _ = _accumulate(gt, hyp, max_iou_distance)
+    return _pairs(accumulator, gt_rows, hyp_rows)
+
+
 def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
     """Score hypothesis tracks against ground truth (CLEAR MOT, IDF1, centre errors).
 
@@ -419,62 +508,14 @@ def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
     >>> scores.mean_centre_error   # 0, 0 and 1 pixel
     0.3333333333333333
     """
-    try:
-        import motmetrics
-        from motmetrics.lap import linear_sum_assignment
-    except ImportError as exc:  # pragma: no cover - motmetrics is a dependency
-        raise TrackingError(f"evaluation needs the motmetrics package ({exc})") from None
-
-    gt_rows = _track_table(gt, "the ground truth", allow_empty=False)
-    hyp_rows = _track_table(hyp, "the hypotheses", allow_empty=True)
-    if not (gt_rows[:, _FLAG] != 0).any():
-        raise TrackingError("the ground truth has no scored row (every row has flag 0)")
-
-    gt_rows = gt_rows[np.argsort(gt_rows[:, _FRAME], kind="stable")]
-    hyp_rows = hyp_rows[np.argsort(hyp_rows[:, _FRAME], kind="stable")]
-    frames = np.union1d(gt_rows[:, _FRAME], hyp_rows[:, _FRAME]).astype(int)
-    gt_starts = np.searchsorted(gt_rows[:, _FRAME], frames, side="left")
-    gt_stops = np.searchsorted(gt_rows[:, _FRAME], frames, side="right")
-    hyp_starts = np.searchsorted(hyp_rows[:, _FRAME], frames, side="left")
-    hyp_stops = np.searchsorted(hyp_rows[:, _FRAME], frames, side="right")
-
-    accumulator = motmetrics.MOTAccumulator(auto_id=False)
-    ignored_predictions = 0
-    for frame, g0, g1, h0, h1 in zip(frames, gt_starts, gt_stops, hyp_starts, hyp_stops):
-        frame_gt = gt_rows[g0:g1]
-        frame_hyp = hyp_rows[h0:h1]
-        distance = iou_distance(frame_gt[:, _X:_FLAG], frame_hyp[:, _X:_FLAG], max_iou_distance)
-        scored = frame_gt[:, _FLAG] != 0
-        kept = np.ones(len(frame_hyp), dtype=bool)
-        if not scored.all() and len(frame_hyp):
-            # MOTChallenge protocol: match against all ground truth, drop what matched an ignored box.
-            for i, j in zip(*linear_sum_assignment(distance)):
-                if np.isfinite(distance[i, j]) and not scored[i]:
-                    kept[j] = False
-            ignored_predictions += int((~kept).sum())
-        accumulator.update(
-            frame_gt[scored, _ID].astype(int),
-            frame_hyp[kept, _ID].astype(int),
-            distance[np.ix_(scored, kept)],
-            frameid=int(frame),
-        )
+    accumulator, gt_rows, hyp_rows, ignored_predictions = _accumulate(gt, hyp, max_iou_distance)
+    import motmetrics
 
     names = ["mota", "motp", "idf1", "precision", "recall", "num_switches", "num_false_positives",
              "num_misses", "num_detections", "num_objects", "num_predictions", "num_frames"]
     summary = motmetrics.metrics.create().compute(accumulator, metrics=names, name="tracks").iloc[0]
 
-    # Centre errors over the matched pairs.  The event table also repeats a pair as a
-    # TRANSFER / ASCEND / MIGRATE event; only MATCH and SWITCH are the pairs of the frame.
-    events = accumulator.mot_events
-    pairs = events[events["Type"].isin(["MATCH", "SWITCH"])]
-    pair_frames = pairs.index.get_level_values("FrameId").to_numpy(dtype=int)
-    gt_index = {(int(f), int(i)): k for k, (f, i) in enumerate(gt_rows[:, :2])}
-    hyp_index = {(int(f), int(i)): k for k, (f, i) in enumerate(hyp_rows[:, :2])}
-    gt_pick = [gt_index[(f, int(o))] for f, o in zip(pair_frames, pairs["OId"].to_numpy())]
-    hyp_pick = [hyp_index[(f, int(h))] for f, h in zip(pair_frames, pairs["HId"].to_numpy())]
-    centre_errors = np.linalg.norm(
-        _centres(gt_rows[np.asarray(gt_pick, dtype=int)]) - _centres(hyp_rows[np.asarray(hyp_pick, dtype=int)]),
-        axis=1)
+    centre_errors = _pairs(accumulator, gt_rows, hyp_rows)[:, 3]
     nan = float("nan")
 
     return Scores(

@@ -672,39 +672,31 @@ def _float(text: Any) -> float | None:
 
 
 def _centre_errors(gt: np.ndarray, tracks: np.ndarray, by_id: bool) -> dict[int, list[list[float]]]:
-    """Per scored ground-truth target: ``[frame, centre error]`` of each frame it has an estimate."""
-    from plugins.video_tracking.evaluation import iou_distance
+    """Per scored ground-truth target: ``[frame, centre error]`` of each frame it has an estimate.
+
+    ``by_id``: the estimate is the track with the target's id, whatever its overlap; otherwise
+    it is the track paired with the target in that frame by the scoring (IoU ≥ 0.5,
+    :func:`~plugins.video_tracking.evaluation.matched_pairs`).
+    """
+    from plugins.video_tracking.evaluation import matched_pairs
 
     gt = np.asarray(gt, dtype=np.float64)
-    if gt.shape[1] > 6:
-        gt = gt[gt[:, 6] != 0]
     tracks = np.asarray(tracks, dtype=np.float64).reshape(-1, 10)
-
-    def centres(rows: np.ndarray) -> np.ndarray:
-        return rows[:, 2:4] + rows[:, 4:6] / 2.0
-
-    errors: dict[int, list[list[float]]] = {}
     if by_id:
-        estimate = {(int(f), int(i)): c for (f, i), c in zip(tracks[:, :2], centres(tracks))}
-        for (f, i), c in zip(gt[:, :2], centres(gt)):
-            found = estimate.get((int(f), int(i)))
-            if found is not None:
-                errors.setdefault(int(i), []).append([int(f), float(np.hypot(*(found - c)))])
-    else:
-        from motmetrics.lap import linear_sum_assignment
+        if gt.shape[1] > 6:
+            gt = gt[gt[:, 6] != 0]
 
-        for frame in np.unique(gt[:, 0]):
-            g = gt[gt[:, 0] == frame]
-            h = tracks[tracks[:, 0] == frame]
-            if not len(h):
-                continue
-            distance = iou_distance(g[:, 2:6], h[:, 2:6])
-            for a, b in zip(*linear_sum_assignment(distance)):
-                if np.isfinite(distance[a, b]):
-                    error = float(np.hypot(*(centres(h[b:b + 1])[0] - centres(g[a:a + 1])[0])))
-                    errors.setdefault(int(g[a, 1]), []).append([int(frame), error])
-    for pairs in errors.values():
-        pairs.sort()
+        def centres(rows: np.ndarray) -> np.ndarray:
+            return rows[:, 2:4] + rows[:, 4:6] / 2.0
+
+        estimate = {(int(f), int(i)): c for (f, i), c in zip(tracks[:, :2], centres(tracks))}
+        rows = [(int(f), int(i), float(np.hypot(*(estimate[int(f), int(i)] - c))))
+                for (f, i), c in zip(gt[:, :2], centres(gt)) if (int(f), int(i)) in estimate]
+    else:
+        rows = [(int(f), int(i), float(e)) for f, i, _, e in matched_pairs(gt, tracks)]
+    errors: dict[int, list[list[float]]] = {}
+    for frame, target, error in sorted(rows):
+        errors.setdefault(target, []).append([frame, error])
     return dict(sorted(errors.items()))
 
 
