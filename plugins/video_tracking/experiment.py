@@ -795,9 +795,9 @@ def run_experiment(experiment: Experiment, out_dir: str | os.PathLike[str], *, w
                 if error is not None:
                     failures.append((cell, error))
                     continue
-                _write_text(cell_dir / f"{cell.key}.json",
-                            json.dumps(record, allow_nan=False, default=_json_default) + "\n")
-                records[cell.key] = _read_cell(cell_dir / f"{cell.key}.json", cell.key)
+                text = json.dumps(record, allow_nan=False, default=_json_default)
+                _write_text(cell_dir / f"{cell.key}.json", text + "\n")
+                records[cell.key] = json.loads(text)    # as a reused cell reads: lists, not tuples
         finally:
             bar.close()
 

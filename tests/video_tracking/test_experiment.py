@@ -345,3 +345,20 @@ def test_rms_per_frame_counts_only_runs_with_an_estimate():
     assert [(r["frame"], r["runs"]) for r in rows] == [(1, 2), (2, 1)]
     assert rows[0]["rms_error"] == pytest.approx(math.sqrt(12.5))
     assert rows[1]["rms_error"] == 6.0
+
+
+def test_an_output_path_that_is_a_file_is_refused(tmp_path):
+    target = tmp_path / "taken"
+    target.write_text("not a folder", encoding="utf-8")
+    with pytest.raises(ExperimentError, match="exists and is not a folder"):
+        run_experiment(experiment_from_mapping(SMALL), target, workers=1, progress=False)
+    assert target.read_text(encoding="utf-8") == "not a folder"
+
+
+def test_a_scheduler_without_dask_names_the_extra(tmp_path, monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "distributed", None)     # import distributed -> ImportError
+    with pytest.raises(ExperimentError, match=r'needs the dask extra: pip install "belief\[dask\]"'):
+        run_experiment(experiment_from_mapping(SMALL), tmp_path, scheduler="tcp://127.0.0.1:8786", progress=False)
+    assert not list((tmp_path / "cells").glob("*.json"))
