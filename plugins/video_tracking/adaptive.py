@@ -53,7 +53,7 @@ from typing import Optional, Union
 import numpy as np
 
 from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.particles import DegenerateWeightsWarning, systematic
+from plugins.video_tracking.particles import DegenerateWeightsWarning, _real, systematic
 
 __all__ = [
     "AdaptiveConfig",
@@ -85,18 +85,6 @@ _HISTOGRAM_TOLERANCE = 1e-6
 
 
 # -- validation -----------------------------------------------------------------------------------
-
-
-def _real(name: str, value: object) -> float:
-    if isinstance(value, bool):
-        raise TrackingError(f"{name} must be a real number, got {value!r}")
-    try:
-        number = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise TrackingError(f"{name} must be a real number, got {value!r}") from None
-    if not math.isfinite(number):
-        raise TrackingError(f"{name} must be finite, got {value!r}")
-    return number
 
 
 def _epsilon(name: str, value: object) -> float:

@@ -46,6 +46,8 @@ from typing import Optional, Protocol
 
 import numpy as np
 
+from plugins.video_tracking.errors import TrackingError
+
 __all__ = [
     "STATE",
     "STATE_DIM",
@@ -89,12 +91,15 @@ class DegenerateWeightsWarning(UserWarning):
 
 
 def _real(name: str, value: object) -> float:
+    """``value`` as a finite float; a bool, a non-number or ±inf/NaN raises :class:`TrackingError`."""
+    if isinstance(value, bool):
+        raise TrackingError(f"{name} must be a real number, got {value!r}")
     try:
         number = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {value!r}") from None
+        raise TrackingError(f"{name} must be a real number, got {value!r}") from None
     if not math.isfinite(number):
-        raise ValueError(f"{name} must be finite, got {value!r}")
+        raise TrackingError(f"{name} must be finite, got {value!r}")
     return number
 
 

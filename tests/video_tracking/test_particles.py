@@ -648,3 +648,11 @@ def test_a_whole_filter_run_is_reproducible_from_its_seed():
     assert not np.array_equal(first, run(100))
     # The filter follows the target it was given.
     np.testing.assert_allclose(first[-1, [CX, CY]], [70.0, 50.0], atol=5.0)
+
+
+@pytest.mark.parametrize("value", [True, "fast", float("nan")])
+def test_motion_settings_refuse_bools_text_and_nan(value):
+    from plugins.video_tracking.errors import TrackingError
+
+    with pytest.raises(TrackingError, match="sigma_pos must be"):
+        MotionConfig(sigma_pos=value)
