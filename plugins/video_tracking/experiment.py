@@ -622,8 +622,7 @@ def run_cell(cell: Cell) -> dict[str, Any]:
     with tempfile.TemporaryDirectory(prefix="belief-cell-") as folder:
         summary = run(frames, plan, config, out_dir=folder, seed=cell.seed, write_video=False, progress=False,
                       write_plot=False)
-        with open(Path(folder) / "diagnostics.csv", encoding="ascii", newline="") as handle:
-            diagnostics = list(csv.DictReader(handle))
+    diagnostics = summary.diagnostics
     tracks = summary.tracks
     scores = evaluate(gt, tracks)
     errors = _centre_errors(gt, tracks, by_id=cell.sequence.init == "gt")
@@ -631,7 +630,7 @@ def run_cell(cell: Cell) -> dict[str, Any]:
     seconds = time.perf_counter() - started
 
     def mean_of(column: str) -> float:
-        values = [float(row[column]) for row in diagnostics if row.get(column) not in (None, "", "nan")]
+        values = [float(row[column]) for row in diagnostics if _float(row.get(column)) is not None]
         return float(np.mean(values)) if values else math.nan
 
     row = {

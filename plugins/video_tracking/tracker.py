@@ -865,6 +865,8 @@ class Summary:
         The evaluation against the ground truth, when it is known.
     files : dict of str to Path
         The output files by name.
+    diagnostics : list of dict
+        The rows of ``diagnostics.csv`` (frame, id and the diagnostic columns), unrounded.
     """
 
     frames: int
@@ -873,6 +875,7 @@ class Summary:
     tracks: np.ndarray
     scores: object | None
     files: dict
+    diagnostics: list = field(default_factory=list, repr=False)
 
     def to_dict(self) -> dict:
         """The JSON-ready part (no arrays)."""
@@ -1038,7 +1041,7 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
     finally:
         if reader is not None:
             reader.close()
-    return Summary(count, tracking_fps, overall_fps, tracks, scores, files)
+    return Summary(count, tracking_fps, overall_fps, tracks, scores, files, records)
 
 
 def _strategy(config: TrackerConfig) -> str:
