@@ -87,7 +87,13 @@ def check_case(masses, owner, rule, r_mode, empty_mode):
                 fused_measures(masses, owner, rule, r_mode, empty_mode, weight)
             continue
         result, _ = fused_measures(masses, owner, rule, r_mode, empty_mode, weight)
-        assert_close(result.weights, want[weight], weight)
+        if weight == "betp":
+            # BetP divides by 1 − m(∅): near total conflict that division magnifies the
+            # rounding of either path by 1 / (1 − m(∅)), so the tolerance scales with it.
+            scale = 1.0 / np.maximum(1.0 - np.asarray(want["empty_mass"]), 1e-300)
+            assert np.all(np.abs(result.weights - want[weight]) <= 1e-12 * scale), weight
+        else:
+            assert_close(result.weights, want[weight], weight)
         assert_close(result.bel, want["bel"], "bel")
         for name in ("singleton_mass", "intersection_mass", "empty_mass"):
             assert_close(getattr(result, name), want[name], name)
