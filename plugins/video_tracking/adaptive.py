@@ -26,7 +26,13 @@ of C (11) (resample N, keep the ⌈0.6·N⌉ resampled particles nearest their m
 s_i = tr Σ_i + ε; the performance index is the product form; ρ_{t−1} multiplies the product
 term of C (14), and each term is normalised over the target's particles before mixing
 (``mix_norm="per_term"``; ``"raw"`` is the formula as printed); C (16) is the reconstructed
-form, with β = ρ[q_init, p_cur] placed as in variant ``"A"`` unless ``"B"`` is asked for.
+form, with β = ρ[q_init, p_cur] weighing the initial template (SPEC B.5, variant A).
+
+:class:`AdaptiveWeighting` is C's method as a weighting strategy of the tracker
+(:mod:`plugins.video_tracking.weighting`): each frame it computes the confidences λ from the
+cues' scores and mixes the product and sum rules with each target's ρ_{t−1}.  The total
+similarity itself, the occlusion test and the template update run after the estimate, in
+:mod:`plugins.video_tracking.appearance`, which keeps ρ.
 
 Examples
 --------
@@ -52,14 +58,15 @@ from typing import Optional, Union
 
 import numpy as np
 
+from plugins.video_tracking import checks
 from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.particles import DegenerateWeightsWarning, _real, systematic
+from plugins.video_tracking.particles import DegenerateWeightsWarning, systematic
+from plugins.video_tracking.weighting import Evidence, Weighing
 
 __all__ = [
     "AdaptiveConfig",
-    "AdaptiveState",
+    "AdaptiveWeighting",
     "MIX_NORMS",
-    "UPDATE_VARIANTS",
     "feature_spreads",
     "feature_entropies",
     "feature_confidences",
@@ -74,9 +81,6 @@ __all__ = [
 MIX_NORMS = ("per_term", "raw")
 """Ways to mix the two terms of C (14): normalised over each target's particles first, or as printed."""
 
-UPDATE_VARIANTS = ("A", "B")
-"""Placements of β in the reconstructed C (16); ``"B"`` swaps β and 1 − β."""
-
 #: Slack on sums that should be 1, and on products like keep·N that should be integers.
 _TOLERANCE = 1e-9
 
@@ -88,24 +92,15 @@ _HISTOGRAM_TOLERANCE = 1e-6
 
 
 def _epsilon(name: str, value: object) -> float:
-    number = _real(name, value)
-    if number <= 0:
-        raise TrackingError(f"{name} must be positive, got {value!r}")
-    return number
+    return checks.number(name, value, positive=True)
 
 
 def _keep(name: str, value: object) -> float:
-    number = _real(name, value)
-    if not 0.0 < number <= 1.0:
-        raise TrackingError(f"{name} must lie in (0, 1], got {value!r}")
-    return number
+    return checks.fraction(name, value, allow_zero=False)
 
 
 def _unit(name: str, value: object) -> float:
-    number = _real(name, value)
-    if not 0.0 <= number <= 1.0:
-        raise TrackingError(f"{name} must lie in [0, 1], got {value!r}")
-    return number
+    return checks.fraction(name, value)
 
 
 def _n_targets(value: object) -> int:
@@ -254,9 +249,9 @@ class AdaptiveConfig:
     rho0 : float
         ρ_0 in [0, 1], the total similarity a new target starts with (C step 1: 0.8).
     mix_norm : {"per_term", "raw"}
-        How C (14) mixes its product and sum terms; see :func:`fuse_adaptive`.
-    update : {"A", "B"}
-        Placement of β in the reconstructed C (16); see :func:`update_templates`.
+        How C (14) mixes its product and sum terms: each normalised over the target's
+        particles first (default), or ``"raw"``, the formula as printed; see
+        :func:`fuse_adaptive`.
     epsilon : float
         ε > 0 added to the spread (s_i = tr Σ_i + ε) and in h_i = 1/(s_i·H_i + ε).
 
@@ -268,18 +263,17 @@ class AdaptiveConfig:
     Examples
     --------
     >>> AdaptiveConfig()
-    AdaptiveConfig(keep=0.6, threshold=0.6, rho0=0.8, mix_norm='per_term', update='A', epsilon=1e-06)
+    AdaptiveConfig(keep=0.6, threshold=0.6, rho0=0.8, mix_norm='per_term', epsilon=1e-06)
     >>> AdaptiveConfig(keep=0)
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.TrackingError: AdaptiveConfig.keep must lie in (0, 1], got 0
+    plugins.video_tracking.errors.TrackingError: AdaptiveConfig.keep must be a number in (0, 1], got 0
     """
 
     keep: float = 0.6
     threshold: float = 0.6
     rho0: float = 0.8
     mix_norm: str = "per_term"
-    update: str = "A"
     epsilon: float = 1e-6
 
     def __post_init__(self) -> None:
@@ -287,12 +281,7 @@ class AdaptiveConfig:
         object.__setattr__(self, "threshold", _unit("AdaptiveConfig.threshold", self.threshold))
         object.__setattr__(self, "rho0", _unit("AdaptiveConfig.rho0", self.rho0))
         object.__setattr__(self, "epsilon", _epsilon("AdaptiveConfig.epsilon", self.epsilon))
-        if self.mix_norm not in MIX_NORMS:
-            raise TrackingError(f"AdaptiveConfig.mix_norm must be one of {', '.join(MIX_NORMS)}, got {self.mix_norm!r}")
-        if self.update not in UPDATE_VARIANTS:
-            raise TrackingError(
-                f"AdaptiveConfig.update must be one of {', '.join(UPDATE_VARIANTS)}, got {self.update!r}"
-            )
+        checks.choice("AdaptiveConfig.mix_norm", self.mix_norm, MIX_NORMS)
 
 
 # -- C (11)–(13): how much to trust each feature --------------------------------------------------
@@ -725,18 +714,16 @@ def update_templates(
     q_prev: np.ndarray,
     p_cur: np.ndarray,
     occluded: np.ndarray,
-    variant: str = "A",
 ) -> np.ndarray:
     """Template update of one feature for every target, frozen under occlusion (C (16), reconstructed).
 
-    Variant ``"A"`` (SPEC B.5 default), with β = ρ[q_init, p̂_cur] = Σ_u √(q_init(u) p̂_cur(u)) (C (9)):
+    With β = ρ[q_init, p̂_cur] = Σ_u √(q_init(u) p̂_cur(u)) (C (9); SPEC B.5, variant A):
 
         p_c = β q̂_{t−1} + (1 − β) p̂_cur,
         q̂_t = β q_init + (1 − β) p_c        if ρ_t ≥ T,     q̂_t = q̂_{t−1}   if ρ_t < T.
 
     An initial template that still fits is kept; one that fits badly hands over to the
-    recent appearance.  Variant ``"B"`` swaps β ↔ 1 − β in both formulas, which anchors harder
-    to q_init under drift.  p̂_cur is p_cur divided by its row sum: a foreground-masked
+    recent appearance.  p̂_cur is p_cur divided by its row sum: a foreground-masked
     histogram sums to its foreground fraction F ≤ 1.  A p_cur row summing to 0 (nothing seen)
     keeps q̂_{t−1}, as does occlusion; those rows are returned bit for bit.
 
@@ -750,7 +737,6 @@ def update_templates(
         Current appearance p_i(x̂_t), non-negative; rows need not sum to 1.
     occluded : array_like of bool, shape (τ,)
         ρ_t < T per target, e.g. from :func:`occluded`.
-    variant : {"A", "B"}
 
     Returns
     -------
@@ -761,21 +747,18 @@ def update_templates(
     ------
     TrackingError
         Shapes that differ, negative or non-finite bins, a template row whose sum is not 1,
-        a non-boolean ``occluded``, an unknown ``variant``.
+        a non-boolean ``occluded``.
 
     Examples
     --------
     q_init = (1, 0), q̂_{t−1} = (½, ½), p_cur = (0.32, 0.18), which sums to F = ½ and
-    normalises to (0.64, 0.36), so β = √0.64 = 0.8.  Variant A: p_c = 0.8·(½, ½) + 0.2·(0.64, 0.36)
-    = (0.528, 0.472), q̂ = 0.8·(1, 0) + 0.2·(0.528, 0.472) = (0.9056, 0.0944).  Variant B:
-    p_c = 0.2·(½, ½) + 0.8·(0.64, 0.36) = (0.612, 0.388), q̂ = 0.2·(1, 0) + 0.8·(0.612, 0.388)
-    = (0.6896, 0.3104).  Under occlusion q̂_{t−1} stays.
+    normalises to (0.64, 0.36), so β = √0.64 = 0.8: p_c = 0.8·(½, ½) + 0.2·(0.64, 0.36)
+    = (0.528, 0.472), q̂ = 0.8·(1, 0) + 0.2·(0.528, 0.472) = (0.9056, 0.0944).  Under occlusion
+    q̂_{t−1} stays.
 
     >>> q_init, q_prev, p_cur = [[1.0, 0.0]], [[0.5, 0.5]], [[0.32, 0.18]]
     >>> update_templates(q_init, q_prev, p_cur, [False]).round(12).tolist()
     [[0.9056, 0.0944]]
-    >>> update_templates(q_init, q_prev, p_cur, [False], variant="B").round(12).tolist()
-    [[0.6896, 0.3104]]
     >>> update_templates(q_init, q_prev, p_cur, [True]).tolist()
     [[0.5, 0.5]]
     """
@@ -790,15 +773,11 @@ def update_templates(
         raise TrackingError(
             f"occluded must be a boolean array of shape ({q_init.shape[0]},), got {frozen.dtype} {frozen.shape}"
         )
-    if variant not in UPDATE_VARIANTS:
-        raise TrackingError(f"variant must be one of {', '.join(UPDATE_VARIANTS)}, got {variant!r}")
 
     mass = p_cur.sum(axis=1)
     seen = mass > 0
     current = p_cur / np.where(seen, mass, 1.0)[:, None]
     beta = np.clip(np.sqrt(q_init * current).sum(axis=1), 0.0, 1.0)[:, None]      # C (9), (τ, 1)
-    if variant == "B":
-        beta = 1.0 - beta
     blend = beta * q_prev + (1.0 - beta) * current                                   # p_c
     updated = beta * q_init + (1.0 - beta) * blend
     totals = updated.sum(axis=1, keepdims=True)                                      # 1 ± rounding where seen
@@ -806,118 +785,54 @@ def update_templates(
     return np.where((seen & ~frozen)[:, None], updated, q_prev)
 
 
-# -- per-tracker state ----------------------------------------------------------------------------
+# -- the weighting strategy ----------------------------------------------------------------------
 
 
-class AdaptiveState:
-    """ρ_{t−1} per target and one frame of C's fusion (Algorithm C, steps 3–4).
+class AdaptiveWeighting:
+    """C's adaptive fusion as a weighting strategy (Algorithm C, steps 3–4; C (11)–(14)).
 
-    The tracker keeps one instance, adds and removes targets in step with its own target
-    order, calls :meth:`step` for the fused log-weights, and hands back the new total
-    similarity (C (15), computed at its estimate) through :meth:`set_similarity`.
+    Every frame: the spread s_i (C (11)) and the entropy H_i (C (12)) of every cue's scores
+    within each target's particles give the confidences λ (C (13)), and the log-weights mix
+    the product and the λ-weighted sum of the cues' own-target likelihoods, the product's
+    share being the target's total similarity ρ_{t−1} of the previous frame (C (14)), read
+    from the evidence.
 
     Parameters
     ----------
-    config : AdaptiveConfig, optional
-    n_targets : int
-        Targets to start with, each at ρ_0 = ``config.rho0``.
+    config : AdaptiveConfig
+    cues : sequence of str
+        The cue names, in score order (for the diagnostics' column names).
+    rng : numpy.random.Generator
+        Draws the systematic resampling of the spreads (C (11)).
+
+    Attributes
+    ----------
+    columns : tuple of str
+        ``confidence_<cue>`` per cue: λ of every target (C (13)).
 
     Examples
     --------
-    >>> state = AdaptiveState(AdaptiveConfig(rho0=0.8), n_targets=1)
-    >>> state.add_target()
-    >>> state.rho_prev.tolist()
-    [0.8, 0.8]
-    >>> state.set_similarity([0.5, 0.9])
-    >>> state.remove_target(0)
-    >>> state.rho_prev.tolist(), state.n_targets
-    ([0.9], 1)
-    >>> positions = np.array([[0.0, 0.0], [2.0, 0.0]])
-    >>> log_p = np.log([[0.5, 0.2], [0.1, 0.4]])
-    >>> log_weights, lam = state.step(positions, log_p, np.array([0, 0]), np.random.default_rng(0))
-    >>> log_weights.shape, lam.shape, bool(np.isclose(np.exp(log_weights).sum(), 1.0))
-    ((2,), (1, 2), True)
+    >>> from plugins.video_tracking.weighting import Evidence
+    >>> scores = (np.log([[0.5, 0.1], [0.1, 0.1]]), np.log([[0.2, 0.1], [0.4, 0.1]]))
+    >>> evidence = Evidence(scores, np.array([0, 0]), np.array([[0.0, 0.0], [2.0, 0.0]]))
+    >>> weighing = AdaptiveWeighting(AdaptiveConfig(), ("colour", "edges"), np.random.default_rng(0)).weigh(evidence)
+    >>> weighing.confidences.shape, bool(np.isclose(np.exp(weighing.log_weights).sum(), 1.0))
+    ((1, 2), True)
     """
 
-    def __init__(self, config: Optional[AdaptiveConfig] = None, n_targets: int = 0) -> None:
-        if config is None:
-            config = AdaptiveConfig()
-        if not isinstance(config, AdaptiveConfig):
-            raise TrackingError(f"config must be an AdaptiveConfig, got {type(config).__name__}")
-        self._config = config
-        self._rho = np.full(_n_targets(n_targets), config.rho0)
+    def __init__(self, config: AdaptiveConfig, cues, rng: np.random.Generator) -> None:
+        self.config = config
+        self.columns = tuple(f"confidence_{name}" for name in cues)
+        self.rng = rng
 
-    def __repr__(self) -> str:
-        return f"AdaptiveState(n_targets={self.n_targets}, rho_prev={np.round(self._rho, 3).tolist()})"
-
-    @property
-    def config(self) -> AdaptiveConfig:
-        """The settings."""
-        return self._config
-
-    @property
-    def n_targets(self) -> int:
-        """τ, the number of targets tracked."""
-        return int(self._rho.size)
-
-    @property
-    def rho_prev(self) -> np.ndarray:
-        """ρ_{t−1} per target, shape (τ,), a copy."""
-        return self._rho.copy()
-
-    def add_target(self) -> None:
-        """Append a target, which starts at ρ_0 = ``config.rho0`` (C step 1)."""
-        self._rho = np.append(self._rho, self._config.rho0)
-
-    def remove_target(self, index: int) -> None:
-        """Drop target ``index`` (0..τ−1); later targets move down by one, as in the tracker's list."""
-        try:
-            position = operator.index(index)
-        except TypeError:
-            raise TrackingError(f"index must be an integer, got {index!r}") from None
-        if isinstance(index, bool) or not 0 <= position < self.n_targets:
-            raise TrackingError(f"index must lie in 0..{self.n_targets - 1}, got {index!r}")
-        self._rho = np.delete(self._rho, position)
-
-    def set_similarity(self, rho_t: np.ndarray) -> None:
-        """Store the total similarities ρ_t (C (15)) as the next frame's ρ_{t−1}.
-
-        Parameters
-        ----------
-        rho_t : array_like, shape (τ,)
-            Values in [0, 1].
-        """
-        self._rho = _similarities("rho_t", rho_t, self.n_targets).copy()
-
-    def step(
-        self,
-        positions: np.ndarray,
-        log_p: np.ndarray,
-        owner: np.ndarray,
-        rng: np.random.Generator,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Fused log-weights of one frame: C (11) → C (12) → C (13) → C (14) with the stored ρ_{t−1}.
-
-        Parameters
-        ----------
-        positions : array_like, shape (P, 2)
-        log_p : array_like, shape (P, c)
-        owner : array_like of int, shape (P,)
-            Targets in 0..τ−1, τ = :attr:`n_targets`.
-        rng : numpy.random.Generator
-            Used by :func:`feature_spreads` only.
-
-        Returns
-        -------
-        log_weights : ndarray, shape (P,)
-            C (14) mixed as ``config.mix_norm`` says.
-        lam : ndarray, shape (τ, c)
-            The confidences λ (C (13)), for C (15).
-        """
-        config = self._config
-        spreads = feature_spreads(positions, log_p, owner, self.n_targets, rng, keep=config.keep,
-                                  epsilon=config.epsilon)
-        entropies = feature_entropies(log_p, owner, self.n_targets)
-        lam = feature_confidences(spreads, entropies, epsilon=config.epsilon)
-        log_weights = fuse_adaptive(log_p, owner, self.n_targets, lam, self._rho, mix_norm=config.mix_norm)
-        return log_weights, lam
+    def weigh(self, evidence: Evidence) -> Weighing:
+        config, tau = self.config, evidence.n_targets
+        own, owner = evidence.own, evidence.owner
+        spreads = feature_spreads(evidence.positions, own, owner, tau, self.rng, keep=config.keep,
+                                  epsilon=config.epsilon)                                     # C (11)
+        confidences = feature_confidences(spreads, feature_entropies(own, owner, tau),
+                                          epsilon=config.epsilon)                             # C (12)–(13)
+        previous = evidence.similarity if evidence.similarity is not None else np.full(tau, config.rho0)
+        log_weights = fuse_adaptive(own, owner, tau, confidences, previous, mix_norm=config.mix_norm)  # C (14)
+        diagnostics = {column: confidences[:, k] for k, column in enumerate(self.columns)}
+        return Weighing(log_weights, diagnostics, confidences)

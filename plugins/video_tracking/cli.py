@@ -1,21 +1,27 @@
-"""The ``belief track`` subcommand (entry point ``belief.commands``: ``track``).
+"""The plugin's ``belief`` subcommands: ``track``, ``eval`` and ``experiment`` (entry points ``belief.commands``).
 
 ``belief track VIDEO --out DIR [options]`` tracks a video: with no init file the tracks are
 started and ended automatically from the background model (SPEC B.4); ``--init BOXES``
 gives the targets of the first frame (later entries are still found automatically);
 ``--init-from-gt GT.txt`` takes every birth and death from a ground truth and scores the
 tracks against it.  ``belief track --demo --out DIR`` renders the synthetic demo scene,
-tracks it from its ground truth and prints the scores.  Bad input raises a
-:class:`~plugins.video_tracking.errors.TrackingError`, which the ``belief`` command line
-reports in one line with exit status 1.
+tracks it from its ground truth and prints the scores.  ``--set KEY=VALUE`` reaches every
+setting of :class:`~plugins.video_tracking.config.TrackerConfig`.
+
+``belief eval TRACKS.txt GT.txt`` scores tracks; ``belief experiment GRID.toml`` runs a
+grid of seeded runs.  Every value is checked here or in the settings dataclasses; bad
+input raises a :class:`~plugins.video_tracking.errors.TrackingError`, which the ``belief``
+command line reports in one line with exit status 1.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+from pathlib import Path
 from typing import Any
 
-__all__ = ["register", "AUTOMATIC_WARM_UP"]
+__all__ = ["register", "register_eval", "register_experiment", "AUTOMATIC_WARM_UP", "parse_setting"]
 
 #: Frames the background model learns from before an automatic run (``--warm-up``).
 AUTOMATIC_WARM_UP = 50
@@ -25,40 +31,80 @@ def _cues(text: str) -> tuple[str, ...]:
     return tuple(name.strip() for name in text.split(",") if name.strip())
 
 
-def _cmd_track(args: argparse.Namespace) -> int:
-    from plugins.video_tracking import scenes
-    from plugins.video_tracking.errors import TrackingError
-    from plugins.video_tracking.initiation import InitiationConfig
-    from plugins.video_tracking.tracker import TrackerConfig, init_from_gt, read_init_boxes, run
+def parse_setting(text: str) -> tuple[list[str], Any]:
+    """``KEY=VALUE`` of ``--set``: a dotted key path and a TOML value (bare words are text).
 
-    if args.particles is not None and args.particles < 1:
-        raise TrackingError(f"--particles must be a positive integer, got {args.particles}")
-    if args.seed < 0:
-        raise TrackingError(f"--seed must be a non-negative integer, got {args.seed}")
+    Examples
+    --------
+    >>> parse_setting("masses=normalised")
+    (['masses'], 'normalised')
+    >>> parse_setting("location.sigma=8")
+    (['location', 'sigma'], 8)
+    >>> parse_setting("cues=['colour', 'edges']")
+    (['cues'], ['colour', 'edges'])
+    """
+    from plugins.video_tracking.errors import TrackingError
+
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+        import tomli as tomllib
+
+    key, separator, value = text.partition("=")
+    path = [part.strip() for part in key.split(".")]
+    if not separator or not all(path):
+        raise TrackingError(f"--set takes KEY=VALUE (e.g. masses=normalised or location.sigma=8), got {text!r}")
+    try:
+        parsed = tomllib.loads(f"value = {value.strip()}")["value"]
+    except tomllib.TOMLDecodeError:
+        parsed = value.strip()
+    return path, parsed
+
+
+def _settings(args: argparse.Namespace) -> dict[str, Any]:
+    """The TrackerConfig settings of the command line: ``--set`` values, then the dedicated flags."""
+    from plugins.video_tracking.errors import TrackingError
+
     options: dict[str, Any] = {}
-    if args.particles is not None:
-        options["particles"] = args.particles
+    for text in args.set or ():
+        path, value = parse_setting(text)
+        table = options
+        for part in path[:-1]:
+            table = table.setdefault(part, {})
+            if not isinstance(table, dict):
+                raise TrackingError(f"--set {text}: {part} is not a table of settings")
+        table[path[-1]] = value
+    flags = {"particles": args.particles, "rule": args.rule, "weight": args.weight, "fusion": args.fusion,
+             "warm_up": args.warm_up, "diagnostics": args.diagnostics}
+    options.update({key: value for key, value in flags.items() if value is not None})
     if args.cues is not None:
         options["cues"] = _cues(args.cues)
-    if args.rule is not None:
-        options["rule"] = args.rule
-    if args.weight is not None:
-        options["weight"] = args.weight
-    if args.fusion is not None:
-        options["fusion"] = args.fusion
     if args.adaptive_particles:
         options["adaptive_particles"] = True
-    if args.warm_up is not None:
-        if args.warm_up < 0:
-            raise TrackingError(f"--warm-up must be a non-negative integer, got {args.warm_up}")
-        options["warm_up"] = args.warm_up
+    if args.template_update:
+        options["template_update"] = True
     automatic = not args.demo and args.init_from_gt is None
-    if automatic:
+    if automatic and options.get("initiation") is not False:
         # Without an init file every track starts from the background model, which must know
         # the background before the first frame; with one, only later entries are added.
-        options["initiation"] = InitiationConfig(first_frame=args.init is None)
+        table = options.get("initiation")
+        table = dict(table) if isinstance(table, dict) else {}
+        table.setdefault("first_frame", args.init is None)
+        options["initiation"] = table
         options.setdefault("warm_up", AUTOMATIC_WARM_UP)
-    config = TrackerConfig(**options)
+    return options
+
+
+def _cmd_track(args: argparse.Namespace) -> int:
+    from plugins.video_tracking import scenes
+    from plugins.video_tracking.config import TrackerConfig
+    from plugins.video_tracking.errors import TrackingError
+    from plugins.video_tracking.initiation import init_from_gt, read_init_boxes
+    from plugins.video_tracking.runner import run
+
+    if args.seed < 0:
+        raise TrackingError(f"--seed must be a non-negative integer, got {args.seed}")
+    config = TrackerConfig.from_settings(_settings(args), "belief track")
     progress = not args.no_progress
 
     if args.demo:
@@ -133,11 +179,119 @@ def register(subparsers: Any) -> None:
     p.add_argument("--rule", metavar="RULE", help="combination rule of --fusion belief (default r_rule; "
                                                   "see 'belief rules')")
     p.add_argument("--weight", choices=["bel", "pls", "betp"], help="particle weight (default bel)")
+    p.add_argument("--template-update", action="store_true",
+                   help="let the appearance templates follow their targets (C (16)), frozen under occlusion; "
+                        "the adaptive fusion always does")
     p.add_argument("--adaptive-particles", action="store_true",
                    help="adapt each target's particle count to the conflict between its cues (at most --particles)")
     p.add_argument("--warm-up", type=int, metavar="N",
                    help=f"frames spread over the video that the background model learns from first "
                         f"(default {AUTOMATIC_WARM_UP} without an init file, else 0)")
+    p.add_argument("--diagnostics", choices=["strategy", "all"],
+                   help="diagnostics.csv columns: those of the running parts (default), or all of them, whatever "
+                        "the fusion (W (33)-(35) masses, C (13) confidences, C (15) similarity)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="any tracker setting, e.g. --set masses=normalised, --set location.literal=true, "
+                        "--set adaptive_fusion.mix_norm=raw (repeatable; values in TOML syntax)")
     p.add_argument("--no-video", action="store_true", help="do not write annotated.avi")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_track)
+
+
+# -- belief eval -----------------------------------------------------------------------------------
+def _cmd_eval(args: argparse.Namespace) -> int:
+    from plugins.video_tracking.evaluation import evaluate
+    from plugins.video_tracking.motfiles import read_mot
+
+    tracks = read_mot(args.tracks)
+    gt = read_mot(args.gt)
+    scores = evaluate(gt, tracks)
+    if args.json:
+        print(json.dumps(scores.to_dict(), indent=2))
+    else:
+        print(scores.format_table())
+    return 0
+
+
+def register_eval(subparsers: Any) -> None:
+    """Add the ``eval`` subcommand to a ``belief`` sub-parser collection.
+
+    ``belief eval TRACKS.txt GT.txt [--json]`` prints the
+    :class:`~plugins.video_tracking.evaluation.Scores` of the tracks against the ground
+    truth, as a table or as JSON.  Bad files raise
+    :class:`~plugins.video_tracking.errors.TrackFileError`, which the ``belief`` command
+    line reports in one line.
+
+    Examples
+    --------
+    >>> parser = argparse.ArgumentParser(prog="belief")
+    >>> register_eval(parser.add_subparsers(dest="command"))
+    >>> args = parser.parse_args(["eval", "tracks.txt", "gt.txt", "--json"])
+    >>> args.tracks, args.gt, args.json
+    ('tracks.txt', 'gt.txt', True)
+    """
+    p = subparsers.add_parser(
+        "eval", help="score tracks against ground truth (MOTA, MOTP, IDF1, centre error)",
+        description="Score MOTChallenge tracks against ground truth: CLEAR MOT (IoU >= 0.5), IDF1, "
+                    "ID switches, false positives, misses and box-centre errors. Ground-truth rows "
+                    "with flag 0 are not scored, and hypotheses matched to them are dropped. "
+                    "MOTP is the mean IoU of the matched pairs.")
+    p.add_argument("tracks", metavar="TRACKS.txt", help="tracker output, MOTChallenge CSV")
+    p.add_argument("gt", metavar="GT.txt", help="ground truth, MOTChallenge CSV")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=_cmd_eval)
+
+
+# -- belief experiment -----------------------------------------------------------------------------
+def _cmd_experiment(args: argparse.Namespace) -> int:
+    from plugins.video_tracking.experiment import load_experiment
+    from plugins.video_tracking.grid import run_experiment
+    from plugins.video_tracking.tables import format_summary
+
+    experiment = load_experiment(args.config, data_dir=args.data)
+    out = Path(args.out) if args.out is not None else Path(args.config).with_suffix("")
+    cells = experiment.cells()
+    print(f"{experiment.name}: {len(experiment.sequences)} sequences x {len(experiment.methods)} methods x "
+          f"{len(experiment.seeds)} seeds = {len(cells)} runs; outputs in {out}", flush=True)
+    if args.dry_run:
+        for cell in cells:
+            print(f"  {cell.label}")
+        return 0
+    result = run_experiment(experiment, out, workers=args.workers, scheduler=args.scheduler, fresh=args.fresh,
+                            progress=not args.no_progress)
+    print(f"ran {result.computed} runs, reused {result.reused} finished ones")
+    print(format_summary(result.summary))
+    return 0
+
+
+def register_experiment(subparsers: Any) -> None:
+    """Add the ``experiment`` subcommand to a ``belief`` sub-parser collection.
+
+    Examples
+    --------
+    >>> parser = argparse.ArgumentParser(prog="belief")
+    >>> register_experiment(parser.add_subparsers(dest="command"))
+    >>> args = parser.parse_args(["experiment", "grid.toml", "--workers", "2", "--scheduler", "local"])
+    >>> args.config, args.workers, args.scheduler, args.fresh
+    ('grid.toml', 2, 'local', False)
+    """
+    p = subparsers.add_parser(
+        "experiment", help="run a grid of seeded tracking runs and tabulate their scores",
+        description="Run every cell of a grid (sequences x methods x seeds) described by a TOML file, in parallel "
+                    "on local processes or on a Dask cluster, and write results.csv (one row per run: scores and "
+                    "timings), rms.csv (RMS position error per target and frame over the seeds, W (36)) and "
+                    "summary.csv into --out. Finished runs are kept in --out/cells, so an interrupted experiment "
+                    "resumes where it stopped.")
+    p.add_argument("config", metavar="CONFIG", help="the experiment's TOML file")
+    p.add_argument("--out", metavar="DIR", help="output folder (default: CONFIG without its suffix)")
+    p.add_argument("--data", metavar="DIR", help="folder of the relative video and gt paths (default: CONFIG's "
+                                                  "folder)")
+    p.add_argument("--workers", type=int, metavar="N", help="local processes, or local Dask workers "
+                                                             "(default: one per core)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="run on the Dask scheduler at ADDRESS "
+                                                           "(tcp://host:8786), or 'local' for a Dask cluster on "
+                                                           "this machine (needs belief[dask])")
+    p.add_argument("--fresh", action="store_true", help="run every cell again, even the finished ones")
+    p.add_argument("--dry-run", action="store_true", help="list the runs and stop")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_experiment)

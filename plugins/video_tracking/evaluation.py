@@ -1,6 +1,7 @@
 """Scoring tracks against ground truth: CLEAR MOT (MOTA, MOTP), IDF1 and centre errors.
 
-Tracks and ground truth are MOTChallenge text files (:func:`read_mot`): one box per line,
+Tracks and ground truth are MOTChallenge rows (read by
+:func:`~plugins.video_tracking.motfiles.read_mot`): one box per row,
 ``frame,id,x,y,w,h,flag,...`` with the box's top-left corner ``(x, y)`` and size ``(w, h)``
 in pixels.  :func:`evaluate` follows the usual MOTChallenge protocol:
 
@@ -18,133 +19,34 @@ The IoU distances are computed here, not with ``motmetrics.distances.iou_matrix`
 released motmetrics 1.4.0 calls ``np.asfarray``, which NumPy 2 removed.
 
 ``motmetrics`` (and with it pandas) is imported only when :func:`evaluate` runs, so that
-registering the ``belief eval`` command costs nothing for the other commands.
+the ``belief`` command line starts without it.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
 from dataclasses import asdict, dataclass, fields
-from os import PathLike
 from typing import Any
 
 import numpy as np
 
-from belief.textfiles import read_text
-from plugins.video_tracking.errors import TrackFileError, TrackingError
+from plugins.video_tracking.boxes import check_boxes, iou
+from plugins.video_tracking.errors import TrackingError
 
 __all__ = [
-    "MOT_COLUMNS",
     "Scores",
     "matched_pairs",
-    "read_mot",
     "iou_distance",
     "evaluate",
-    "register_eval",
 ]
 
-#: Columns of the array returned by :func:`read_mot`.  ``flag`` is the 7th column of the
-#: file: for ground truth, 0 means "not scored"; for tracker output it is a confidence,
-#: which the evaluation does not use.  Files with only 6 columns get a flag of 1.
-MOT_COLUMNS = ("frame", "id", "x", "y", "width", "height", "flag")
-
-_FRAME, _ID, _X, _Y, _W, _H, _FLAG = range(len(MOT_COLUMNS))
+_FRAME, _ID, _X, _Y, _W, _H, _FLAG = range(7)
 _MIN_FIELDS, _MAX_FIELDS = 6, 10
-
-
-# -- reading -------------------------------------------------------------------------------------
-def read_mot(path: str | PathLike[str]) -> np.ndarray:
-    """Read a MOTChallenge track or ground-truth file.
-
-    Each non-blank line is ``frame,id,x,y,w,h[,flag[,a[,b[,c]]]]``: 6 to 10 numbers
-    separated by commas (or, if a line has no comma, by white space).  Columns past the
-    7th (class and visibility, or world coordinates) are checked to be numbers and
-    dropped.
-
-    Parameters
-    ----------
-    path : str or path-like
-        The file to read.
-
-    Returns
-    -------
-    rows : ndarray of float, shape (N, 7)
-        One row per box, columns :data:`MOT_COLUMNS`: frame, id, x, y, width, height,
-        flag (1 where the file has only 6 columns), in file order.
-
-    Raises
-    ------
-    TrackFileError
-        The file is missing or unreadable, holds no rows, or a line (named with its
-        number) has the wrong number of fields, a field that is not a finite number, a
-        frame or id that is not an integer, a negative width or height, or repeats the
-        id of an earlier line of the same frame.
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     path = pathlib.Path(folder) / "gt.txt"
-    ...     _ = path.write_text("1,7,10,20,30,40,1,-1,-1,-1\\n2,7,12,20,30,40,0,-1,-1,-1\\n")
-    ...     read_mot(path)
-    array([[ 1.,  7., 10., 20., 30., 40.,  1.],
-           [ 2.,  7., 12., 20., 30., 40.,  0.]])
-    """
-    name = str(path)
-    text = read_text(path, "track file", TrackFileError, encoding="utf-8-sig")
-
-    rows: list[list[float]] = []
-    first_line_of: dict[tuple[int, int], int] = {}
-    for line_number, line in enumerate(text.splitlines(), start=1):
-        stripped = line.strip()
-        if not stripped:
-            continue
-        where = f"{name}, line {line_number}"
-        fields_ = [f.strip() for f in stripped.split(",")] if "," in stripped else stripped.split()
-        if not _MIN_FIELDS <= len(fields_) <= _MAX_FIELDS:
-            raise TrackFileError(
-                f"{where}: expected {_MIN_FIELDS} to {_MAX_FIELDS} fields "
-                f"(frame,id,x,y,w,h,flag,...), got {len(fields_)}")
-        values = []
-        for column, field in enumerate(fields_, start=1):
-            try:
-                value = float(field)
-            except ValueError:
-                raise TrackFileError(f"{where}: field {column} is not a number: {field!r}") from None
-            if not math.isfinite(value):
-                raise TrackFileError(f"{where}: field {column} is not finite: {field!r}")
-            values.append(value)
-        frame, track_id, _, _, width, height = values[:6]
-        for label, value in (("frame", frame), ("id", track_id)):
-            if value != int(value):
-                raise TrackFileError(f"{where}: the {label} must be an integer, got {value:g}")
-        if width < 0 or height < 0:
-            raise TrackFileError(f"{where}: negative box size {width:g} x {height:g}")
-        key = (int(frame), int(track_id))
-        if key in first_line_of:
-            raise TrackFileError(
-                f"{where}: frame {key[0]} has id {key[1]} twice (first on line {first_line_of[key]})")
-        first_line_of[key] = line_number
-        rows.append(values[:7] if len(values) > 6 else values + [1.0])
-    if not rows:
-        raise TrackFileError(f"{name}: no boxes in the file (it is empty)")
-    return np.asarray(rows, dtype=float)
 
 
 # -- IoU distances ---------------------------------------------------------------------------------
 def _boxes(boxes: Any, what: str) -> np.ndarray:
-    array = np.asarray(boxes, dtype=float)
-    if array.size == 0:
-        return array.reshape(0, 4)
-    if array.ndim != 2 or array.shape[1] != 4:
-        raise TrackingError(f"{what} must have shape (n, 4) (x, y, width, height), got {array.shape}")
-    if not np.isfinite(array).all():
-        raise TrackingError(f"{what} hold a value that is not finite")
-    if (array[:, 2:] < 0).any():
-        raise TrackingError(f"{what} hold a negative width or height")
-    return array
+    return check_boxes(boxes, what, positive=False)
 
 
 def iou_distance(gt_boxes: Any, hyp_boxes: Any, max_iou_distance: float = 0.5) -> np.ndarray:
@@ -186,16 +88,7 @@ def iou_distance(gt_boxes: Any, hyp_boxes: Any, max_iou_distance: float = 0.5) -
     """
     if not 0.0 <= max_iou_distance <= 1.0:
         raise TrackingError(f"max_iou_distance must be in [0, 1], got {max_iou_distance}")
-    gt = _boxes(gt_boxes, "ground-truth boxes")[:, None, :]
-    hyp = _boxes(hyp_boxes, "hypothesis boxes")[None, :, :]
-    left = np.maximum(gt[..., 0], hyp[..., 0])
-    right = np.minimum(gt[..., 0] + gt[..., 2], hyp[..., 0] + hyp[..., 2])
-    top = np.maximum(gt[..., 1], hyp[..., 1])
-    bottom = np.minimum(gt[..., 1] + gt[..., 3], hyp[..., 1] + hyp[..., 3])
-    intersection = np.maximum(right - left, 0.0) * np.maximum(bottom - top, 0.0)
-    union = gt[..., 2] * gt[..., 3] + hyp[..., 2] * hyp[..., 3] - intersection
-    iou = np.divide(intersection, union, out=np.zeros_like(intersection), where=union > 0)
-    distance = 1.0 - iou
+    distance = 1.0 - iou(_boxes(gt_boxes, "ground-truth boxes"), _boxes(hyp_boxes, "hypothesis boxes"))
     distance[distance > max_iou_distance] = np.nan
     return distance
 
@@ -469,8 +362,8 @@ def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
     ----------
     gt : array_like, shape (N, 6..10)
         Ground-truth rows ``frame, id, x, y, w, h[, flag, ...]`` as read by
-        :func:`read_mot`.  Rows whose flag is 0 are not scored; without a flag column,
-        every row is.
+        :func:`~plugins.video_tracking.motfiles.read_mot`.  Rows whose flag is 0 are not
+        scored; without a flag column, every row is.
     hyp : array_like, shape (M, 6..10)
         Tracker rows, same layout; the 7th column (a confidence) is not used.  May be
         empty.
@@ -535,48 +428,3 @@ def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
         mean_centre_error=float(np.mean(centre_errors)) if len(centre_errors) else nan,
         median_centre_error=float(np.median(centre_errors)) if len(centre_errors) else nan,
     )
-
-
-# -- command line ----------------------------------------------------------------------------------------
-def _cmd_eval(args: argparse.Namespace) -> int:
-    tracks = read_mot(args.tracks)
-    gt = read_mot(args.gt)
-    scores = evaluate(gt, tracks)
-    if args.json:
-        print(json.dumps(scores.to_dict(), indent=2))
-    else:
-        print(scores.format_table())
-    return 0
-
-
-def register_eval(subparsers: Any) -> None:
-    """Add the ``eval`` subcommand to a ``belief`` sub-parser collection.
-
-    ``belief eval TRACKS.txt GT.txt [--json]`` prints the :class:`Scores` of the tracks
-    against the ground truth, as a table or as JSON (:meth:`Scores.to_dict`).  Bad files
-    raise :class:`~plugins.video_tracking.errors.TrackFileError`, which the ``belief``
-    command line reports in one line.
-
-    Parameters
-    ----------
-    subparsers : argparse._SubParsersAction
-        What ``ArgumentParser.add_subparsers`` returned.
-
-    Examples
-    --------
-    >>> parser = argparse.ArgumentParser(prog="belief")
-    >>> register_eval(parser.add_subparsers(dest="command"))
-    >>> args = parser.parse_args(["eval", "tracks.txt", "gt.txt", "--json"])
-    >>> args.tracks, args.gt, args.json
-    ('tracks.txt', 'gt.txt', True)
-    """
-    p = subparsers.add_parser(
-        "eval", help="score tracks against ground truth (MOTA, MOTP, IDF1, centre error)",
-        description="Score MOTChallenge tracks against ground truth: CLEAR MOT (IoU >= 0.5), IDF1, "
-                    "ID switches, false positives, misses and box-centre errors. Ground-truth rows "
-                    "with flag 0 are not scored, and hypotheses matched to them are dropped. "
-                    "MOTP is the mean IoU of the matched pairs.")
-    p.add_argument("tracks", metavar="TRACKS.txt", help="tracker output, MOTChallenge CSV")
-    p.add_argument("gt", metavar="GT.txt", help="ground truth, MOTChallenge CSV")
-    p.add_argument("--json", action="store_true", help="print JSON")
-    p.set_defaults(func=_cmd_eval)

@@ -24,8 +24,10 @@ from functools import cached_property, partial
 import numpy as np
 
 from belief import MassBatch, Model, combine
-from belief.errors import InvalidMassError
-from belief.rules import get_rule
+from belief.errors import BeliefError, InvalidMassError
+from belief.rules import EMPTY_MODES, R_MODES, get_rule
+from plugins.video_tracking import checks
+from plugins.video_tracking.errors import TrackingError
 from plugins.video_tracking.owner_fusion import first_inconsistency, owner_measures, supports
 
 __all__ = ["FusionConfig", "CueFusion", "FusionResult", "cue_masses", "relative_likelihoods", "WEIGHTS", "MASSES"]
@@ -34,7 +36,10 @@ __all__ = ["FusionConfig", "CueFusion", "FusionResult", "cue_masses", "relative_
 WEIGHTS = ("bel", "pls", "betp")
 
 #: How a cue's likelihoods become its mass function (:func:`cue_masses`).
-MASSES = ("relative", "absolute", "normalised")
+MASSES = ("relative", "normalised")
+
+#: The two ways :func:`cue_masses` reads likelihoods.
+_LIKELIHOOD_READINGS = ("normalised", "absolute")
 
 
 @dataclass(frozen=True)
@@ -49,12 +54,11 @@ class FusionConfig:
         The measure of θ_J that weights a particle of target J (W (32): Bel).
     r_mode, empty_mode : str
         Options of the R-weighted rule (ignored by the other rules).
-    masses : {"relative", "absolute", "normalised"}
-        How each cue's likelihoods become its mass function: ``"absolute"`` keeps the
-        likelihoods and puts the unexplained rest on FA (:func:`cue_masses`);
-        ``"relative"`` (default) does the same with relative likelihoods, each divided by the
-        best own-target likelihood in the particle's set (:func:`relative_likelihoods`);
-        ``"normalised"`` is W (20)–(21) literally.
+    masses : {"relative", "normalised"}
+        How each cue's likelihoods become its mass function: ``"relative"`` (default)
+        divides each likelihood by the best own-target likelihood in the particle's set
+        (:func:`relative_likelihoods`), keeps it as the mass and puts the unexplained rest
+        on FA (:func:`cue_masses` ``"absolute"``); ``"normalised"`` is W (20)–(21) as printed.
     """
 
     rule: str = "r_rule"
@@ -64,11 +68,15 @@ class FusionConfig:
     masses: str = "relative"
 
     def __post_init__(self) -> None:
-        get_rule(self.rule)  # raises UnknownRuleError listing the known rules
-        if self.weight not in WEIGHTS:
-            raise InvalidMassError(f"weight must be one of {', '.join(WEIGHTS)}, got {self.weight!r}")
-        if self.masses not in MASSES:
-            raise InvalidMassError(f"masses must be one of {', '.join(MASSES)}, got {self.masses!r}")
+        try:
+            get_rule(self.rule)
+        except (BeliefError, TypeError) as exc:
+            raise TrackingError(f"FusionConfig.rule: {exc}") from None
+        checks.choice("FusionConfig.weight", self.weight, WEIGHTS)
+        checks.choice("FusionConfig.masses", self.masses, MASSES)
+        if get_rule(self.rule).name == "r_rule":
+            checks.choice("FusionConfig.r_mode", self.r_mode, R_MODES)
+            checks.choice("FusionConfig.empty_mode", self.empty_mode, EMPTY_MODES)
 
     @property
     def options(self) -> dict[str, str]:
@@ -123,8 +131,8 @@ def cue_masses(log_likelihoods: np.ndarray, mode: str = "normalised") -> np.ndar
         raise InvalidMassError(f"log-likelihoods must have shape (P, τ + 1), got {values.shape}")
     if np.isnan(values).any() or np.isposinf(values).any():
         raise InvalidMassError("log-likelihoods must not be NaN or +inf")
-    if mode not in MASSES:
-        raise InvalidMassError(f"mode must be one of {', '.join(MASSES)}, got {mode!r}")
+    if mode not in _LIKELIHOOD_READINGS:
+        raise InvalidMassError(f"mode must be one of {', '.join(_LIKELIHOOD_READINGS)}, got {mode!r}")
     top = values.max(axis=1, keepdims=True)
     dead = ~np.isfinite(top[:, 0])
     shifted = np.exp(values - np.where(dead[:, None], 0.0, top))

@@ -1,4 +1,11 @@
-"""Automatic track initiation and termination from a foreground mask (SPEC B.4, L §1.2 modules 2, 3 and 5).
+"""When tracks start and end: init plans, and automatic initiation from a foreground mask (SPEC B.4).
+
+An :class:`InitPlan` says when each target is born and removed: from a MOTChallenge ground
+truth (:func:`init_from_gt`, as ``belief track --init-from-gt``), from a file of first-frame
+boxes (:func:`read_init_boxes`) or from boxes in code (:func:`init_from_boxes`).
+
+Without a plan, or for the people who enter later, the tracks start and end on their own
+(L §1.2 modules 2, 3 and 5).
 
 L's multi-target tracker starts a target for every foreground blob of the first frame
 (module 2), watches the image border for people who come in or go out (module 3) and
@@ -29,18 +36,28 @@ the connected components; everything else is NumPy.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from os import PathLike
 
 import numpy as np
 
-from plugins.video_tracking.errors import TrackingError
+from belief.textfiles import read_text
+from plugins.video_tracking import checks
+from plugins.video_tracking.boxes import box_centres, check_boxes, intersections, iou
+from plugins.video_tracking.errors import InitError, TrackingError
+from plugins.video_tracking.motfiles import read_mot
 
 __all__ = [
+    "TargetInit",
+    "InitPlan",
+    "init_from_gt",
+    "init_from_boxes",
+    "read_init_boxes",
     "InitiationConfig",
     "Initiator",
     "foreground_blobs",
     "foreground_fraction",
-    "iou",
     "COVERED_FRACTION",
     "CANDIDATE_IOU",
 ]
@@ -56,19 +73,186 @@ COVERED_FRACTION = 0.5
 CANDIDATE_IOU = 0.3
 
 
+# -- init plans ------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class TargetInit:
+    """One target of an :class:`InitPlan`.
+
+    Attributes
+    ----------
+    id : int
+        The track id written to ``tracks.txt``.
+    first_frame : int
+        1-based frame at which the target is born, at ``box``.
+    last_frame : int or None
+        1-based frame after which it is removed; None keeps it to the end.
+    box : (float, float, float, float)
+        ``x, y, w, h`` in 0-based pixels: the initial centre and the base size.
+    """
+
+    id: int
+    first_frame: int
+    last_frame: int | None
+    box: tuple[float, float, float, float]
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "id", checks.integer("a target id", self.id))
+        (box,) = check_boxes(self.box, f"the box of target {self.id}", error=InitError)
+        first = checks.integer(f"the first frame of target {self.id}", self.first_frame)
+        last = None if self.last_frame is None else \
+            checks.integer(f"the last frame of target {self.id}", self.last_frame)
+        if first < 1 or (last is not None and last < first):
+            raise InitError(f"target {self.id}: bad frame range {first}..{last}")
+        object.__setattr__(self, "first_frame", first)
+        object.__setattr__(self, "last_frame", last)
+        object.__setattr__(self, "box", tuple(float(v) for v in box))
+
+
+@dataclass(frozen=True)
+class InitPlan:
+    """When each target is born and removed.
+
+    Attributes
+    ----------
+    targets : tuple of TargetInit
+        Distinct ids, in birth order (then id order).
+    source : str
+        Where the plan came from, for messages and the run's summary.
+    """
+
+    targets: tuple[TargetInit, ...]
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        targets = tuple(sorted(self.targets, key=lambda t: (t.first_frame, t.id)))
+        if not targets:
+            raise InitError(f"{self.source or 'the init'}: no target to track")
+        ids = [t.id for t in targets]
+        if len(set(ids)) != len(ids):
+            raise InitError(f"{self.source or 'the init'}: a target id appears twice")
+        object.__setattr__(self, "targets", targets)
+        births: dict[int, list[TargetInit]] = {}
+        for target in targets:
+            births.setdefault(target.first_frame, []).append(target)
+        object.__setattr__(self, "_births", births)
+
+    def check_image(self, width: int, height: int) -> None:
+        """Raise :class:`InitError` if a birth box does not overlap a ``width`` × ``height`` image."""
+        for target in self.targets:
+            x, y, w, h = target.box
+            if x >= width or y >= height or x + w <= 0 or y + h <= 0:
+                raise InitError(f"{self.source or 'init'}: the box of target {target.id} "
+                                f"(x={x + 1:g}, y={y + 1:g}, w={w:g}, h={h:g}, 1-based) lies outside the "
+                                f"{width}x{height} image")
+
+    def births(self, frame: int) -> list[TargetInit]:
+        """Targets born at 1-based ``frame``."""
+        return list(self._births.get(frame, ()))  # type: ignore[attr-defined]
+
+
+def init_from_gt(gt: str | PathLike[str] | np.ndarray, source: str | None = None) -> InitPlan:
+    """Targets from a MOTChallenge ground truth: each id is born at its first box, removed after its last.
+
+    Parameters
+    ----------
+    gt : path or ndarray, shape (M, ≥6)
+        A file for :func:`~plugins.video_tracking.motfiles.read_mot`, or its rows
+        ``frame, id, x, y, w, h, ...`` (1-based frames and corners).
+    source : str, optional
+        How messages name the plan (default: the path, or "ground truth").
+
+    Examples
+    --------
+    >>> rows = np.array([[1, 7, 11, 21, 10, 20], [2, 7, 12, 21, 10, 20], [2, 3, 1, 1, 5, 5]])
+    >>> [(t.id, t.first_frame, t.last_frame, t.box) for t in init_from_gt(rows).targets]
+    [(7, 1, 2, (10.0, 20.0, 10.0, 20.0)), (3, 2, 2, (0.0, 0.0, 5.0, 5.0))]
+    """
+    if isinstance(gt, np.ndarray):
+        rows, name = np.asarray(gt, dtype=np.float64), source or "ground truth"
+    else:
+        rows, name = read_mot(gt), source or str(gt)
+    if rows.ndim != 2 or rows.shape[0] == 0 or rows.shape[1] < 6:
+        raise InitError(f"{name}: no boxes to initialise the targets from")
+    targets = []
+    for track_id in np.unique(rows[:, 1]):
+        own = rows[rows[:, 1] == track_id]
+        own = own[np.argsort(own[:, 0], kind="stable")]
+        first = own[0]
+        if first[4] <= 0 or first[5] <= 0:
+            raise InitError(f"{name}: the first box of id {int(track_id)} has no area")
+        box = (first[2] - 1.0, first[3] - 1.0, first[4], first[5])
+        targets.append(TargetInit(int(track_id), int(own[0, 0]), int(own[-1, 0]), box))
+    return InitPlan(tuple(targets), source=name)
+
+
+def read_init_boxes(path: str | PathLike[str]) -> InitPlan:
+    """Targets from a CSV of ``id,x,y,w,h`` lines, all born at frame 1 and never removed.
+
+    ``x, y`` is the top-left corner in the MOTChallenge convention (1-based, as in
+    ``tracks.txt`` and ground-truth files).  Blank lines and lines starting with ``#`` are
+    skipped, and so is a first line ``id,x,y,w,h``.
+
+    Raises
+    ------
+    InitError
+        Missing, unreadable or empty file, a malformed line (named with its number), a
+        non-positive size or a repeated id.
+    """
+    name = str(path)
+    text = read_text(path, "init file", InitError, encoding="utf-8-sig")
+    targets = []
+    seen: set[int] = set()
+    for number, line in enumerate(text.splitlines(), start=1):
+        stripped = line.strip()
+        if not stripped or stripped.startswith("#"):
+            continue
+        fields_ = [f.strip() for f in stripped.split(",")]
+        if not targets and [f.lower() for f in fields_] == ["id", "x", "y", "w", "h"]:
+            continue
+        if len(fields_) != 5:
+            raise InitError(f"{name}, line {number}: expected 5 fields id,x,y,w,h, got {len(fields_)}")
+        try:
+            values = [float(f) for f in fields_]
+        except ValueError:
+            raise InitError(f"{name}, line {number}: a field is not a number: {stripped!r}") from None
+        if not all(math.isfinite(v) for v in values):
+            raise InitError(f"{name}, line {number}: a field is not finite")
+        track_id, x, y, w, h = values
+        if track_id != int(track_id):
+            raise InitError(f"{name}, line {number}: the id must be an integer, got {track_id:g}")
+        if w <= 0 or h <= 0:
+            raise InitError(f"{name}, line {number}: the box needs a positive width and height, got {w:g} x {h:g}")
+        if int(track_id) in seen:
+            raise InitError(f"{name}, line {number}: id {int(track_id)} appears twice")
+        seen.add(int(track_id))
+        targets.append(TargetInit(int(track_id), 1, None, (x - 1.0, y - 1.0, w, h)))
+    if not targets:
+        raise InitError(f"init file {name!r} holds no boxes (it is empty)")
+    return InitPlan(tuple(targets), source=name)
+
+
+def init_from_boxes(boxes: Iterable[Sequence[float]], ids: Sequence[int] | None = None) -> InitPlan:
+    """Targets at 0-based boxes ``(x, y, w, h)``, born at frame 1 and never removed.
+
+    Examples
+    --------
+    >>> init_from_boxes([(10, 20, 8, 16)]).targets[0]
+    TargetInit(id=1, first_frame=1, last_frame=None, box=(10.0, 20.0, 8.0, 16.0))
+    """
+    boxes = [tuple(b) for b in boxes]
+    ids = list(range(1, len(boxes) + 1)) if ids is None else list(ids)
+    if len(ids) != len(boxes):
+        raise InitError(f"{len(ids)} ids for {len(boxes)} boxes")
+    return InitPlan(tuple(TargetInit(int(i), 1, None, b) for i, b in zip(ids, boxes)), source="boxes")
+
+
 # -- configuration --------------------------------------------------------------------------------
 def _integer(name: str, value, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise TrackingError(f"InitiationConfig.{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)
+    return checks.integer(f"InitiationConfig.{name}", value, minimum=minimum)
 
 
 def _fraction(name: str, value, *, allow_zero: bool) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
-            or not math.isfinite(value) or value > 1 or value < 0 or (value == 0 and not allow_zero):
-        interval = "[0, 1]" if allow_zero else "(0, 1]"
-        raise TrackingError(f"InitiationConfig.{name} must be a number in {interval}, got {value!r}")
-    return float(value)
+    return checks.fraction(f"InitiationConfig.{name}", value, allow_zero=allow_zero)
 
 
 @dataclass(frozen=True)
@@ -152,9 +336,7 @@ class InitiationConfig:
         object.__setattr__(self, "duplicate_iou", _fraction("duplicate_iou", self.duplicate_iou, allow_zero=False))
         if self.duplicate_frames is not None:
             object.__setattr__(self, "duplicate_frames", _integer("duplicate_frames", self.duplicate_frames, 1))
-        if not isinstance(self.first_frame, (bool, np.bool_)):
-            raise TrackingError(f"InitiationConfig.first_frame must be True or False, got {self.first_frame!r}")
-        object.__setattr__(self, "first_frame", bool(self.first_frame))
+        object.__setattr__(self, "first_frame", checks.flag("InitiationConfig.first_frame", self.first_frame))
 
     def min_area_pixels(self, image_shape: tuple[int, int]) -> float:
         """The smallest blob area in pixels, ``min_area · W · H``, for an image of shape (H, W)."""
@@ -183,19 +365,6 @@ def _checked_mask(mask, shape: tuple[int, int] | None = None) -> np.ndarray:
     if mask.size == 0:
         raise TrackingError(f"the foreground mask is empty (shape {mask.shape})")
     return mask
-
-
-def _checked_boxes(name: str, boxes) -> np.ndarray:
-    boxes = np.asarray(boxes, dtype=np.float64)
-    if boxes.ndim == 1 and boxes.size == 0:
-        boxes = boxes.reshape(0, 4)
-    if boxes.ndim != 2 or boxes.shape[1] != 4:
-        raise TrackingError(f"{name} must have shape (n, 4) (x, y, w, h), got {boxes.shape}")
-    if not np.isfinite(boxes).all():
-        raise TrackingError(f"{name} must be finite")
-    if (boxes[:, 2:] < 0).any():
-        raise TrackingError(f"{name} must have non-negative widths and heights")
-    return boxes
 
 
 # -- blobs, foreground fractions and overlaps -----------------------------------------------------
@@ -302,52 +471,13 @@ def foreground_fraction(mask: np.ndarray, boxes) -> np.ndarray:
     [1.0, 0.25, 1.0, 0.0]
     """
     mask = _checked_mask(mask)
-    boxes = _checked_boxes("boxes", boxes)
+    boxes = check_boxes(boxes, "boxes", positive=False)
     integral = np.zeros((mask.shape[0] + 1, mask.shape[1] + 1), dtype=np.int64)
     np.cumsum(np.cumsum(mask, axis=0, dtype=np.int64), axis=1, out=integral[1:, 1:])
     x0, x1, y0, y1 = _pixel_ranges(boxes, mask.shape)
     foreground = integral[y1, x1] - integral[y0, x1] - integral[y1, x0] + integral[y0, x0]
     pixels = (x1 - x0) * (y1 - y0)
     return np.divide(foreground, pixels, out=np.zeros(len(boxes)), where=pixels > 0)
-
-
-def _intersections(boxes_a: np.ndarray, boxes_b: np.ndarray) -> np.ndarray:
-    left = np.maximum(boxes_a[:, None, 0], boxes_b[None, :, 0])
-    top = np.maximum(boxes_a[:, None, 1], boxes_b[None, :, 1])
-    right = np.minimum(boxes_a[:, None, 0] + boxes_a[:, None, 2], boxes_b[None, :, 0] + boxes_b[None, :, 2])
-    bottom = np.minimum(boxes_a[:, None, 1] + boxes_a[:, None, 3], boxes_b[None, :, 1] + boxes_b[None, :, 3])
-    return np.clip(right - left, 0, None) * np.clip(bottom - top, 0, None)
-
-
-def iou(boxes_a, boxes_b) -> np.ndarray:
-    """Intersection over union of every pair of boxes.
-
-    Parameters
-    ----------
-    boxes_a : array_like, shape (n, 4)
-    boxes_b : array_like, shape (m, 4)
-        ``(x, y, w, h)`` boxes, as continuous rectangles [x, x + w) × [y, y + h).
-
-    Returns
-    -------
-    ndarray of float64, shape (n, m)
-        Area of the intersection over area of the union; 0 where the union is empty.
-
-    Raises
-    ------
-    TrackingError
-        If the boxes are not finite (n, 4) arrays with non-negative sizes.
-
-    Examples
-    --------
-    >>> iou([[0, 0, 2, 2]], [[1, 0, 2, 2], [0, 0, 2, 2], [5, 5, 1, 1], [0, 0, 4, 4]]).tolist()
-    [[0.3333333333333333, 1.0, 0.0, 0.25]]
-    """
-    boxes_a = _checked_boxes("boxes_a", boxes_a)
-    boxes_b = _checked_boxes("boxes_b", boxes_b)
-    inter = _intersections(boxes_a, boxes_b)
-    union = (boxes_a[:, None, 2] * boxes_a[:, None, 3] + boxes_b[None, :, 2] * boxes_b[None, :, 3]) - inter
-    return np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
 
 
 # -- the stateful initiator -----------------------------------------------------------------------
@@ -499,27 +629,8 @@ class Initiator:
     def _checked_tracks(tracks) -> tuple[list[int], np.ndarray]:
         if not isinstance(tracks, dict):
             raise TrackingError(f"tracks must be a dict {{id: (x, y, w, h)}}, got {type(tracks).__name__}")
-        ids = []
-        for track_id in tracks:
-            if isinstance(track_id, bool) or not isinstance(track_id, (int, np.integer)):
-                raise TrackingError(f"track ids must be integers, got {track_id!r}")
-            ids.append(int(track_id))
-        ids.sort()
-        boxes = np.zeros((len(ids), 4))
-        for k, track_id in enumerate(ids):
-            try:
-                box = np.asarray(tracks[track_id], dtype=np.float64)
-            except (TypeError, ValueError):
-                box = np.zeros(0)
-            if box.shape != (4,):
-                raise TrackingError(f"track {track_id} has box {tracks[track_id]!r}: a box must be four numbers "
-                                    f"(x, y, w, h)")
-            boxes[k] = box
-        bad = ~np.isfinite(boxes).all(axis=1) | (boxes[:, 2] <= 0) | (boxes[:, 3] <= 0)
-        if bad.any():
-            index = int(np.argmax(bad))
-            raise TrackingError(f"track {ids[index]} has box {tracks[ids[index]]!r}: a box must be finite "
-                                f"with a positive width and height")
+        ids = sorted(checks.integer("a track id", track_id) for track_id in tracks)
+        boxes = check_boxes([tracks[track_id] for track_id in ids], "track boxes").reshape(-1, 4)
         return ids, boxes
 
     def _covered(self, blobs: np.ndarray, boxes: np.ndarray) -> np.ndarray:
@@ -527,7 +638,7 @@ class Initiator:
         if len(boxes) == 0 or len(blobs) == 0:
             return np.zeros(len(blobs), dtype=bool)
         overlap = iou(blobs, boxes) >= self.config.max_iou
-        inside = _intersections(blobs, boxes) >= COVERED_FRACTION * (blobs[:, 2] * blobs[:, 3])[:, None]
+        inside = intersections(blobs, boxes) >= COVERED_FRACTION * (blobs[:, 2] * blobs[:, 3])[:, None]
         return (overlap | inside).any(axis=1)
 
     def _in_border_zone(self, blobs: np.ndarray) -> np.ndarray:
@@ -543,8 +654,8 @@ class Initiator:
         previous, previous_counts = self._candidates, self._candidate_counts
         if len(blobs) and len(previous):
             overlaps = iou(blobs, previous)
-            centres = blobs[:, :2] + blobs[:, 2:] / 2
-            previous_centres = previous[:, :2] + previous[:, 2:] / 2
+            centres = box_centres(blobs)
+            previous_centres = box_centres(previous)
             distances = np.linalg.norm(centres[:, None, :] - previous_centres[None, :, :], axis=2)
             reach = np.hypot(blobs[:, 2], blobs[:, 3])[:, None] / 2
             rows, cols = np.nonzero((overlaps >= CANDIDATE_IOU) | (distances <= reach))

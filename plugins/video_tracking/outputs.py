@@ -2,7 +2,7 @@
 
 * ``tracks.txt`` — MOTChallenge CSV ``frame,id,x,y,w,h,-1,-1,-1,-1`` (1-based frame and corner);
 * ``diagnostics.csv`` — per frame and target, the means of W (33)–(35) and more
-  (:data:`plugins.video_tracking.tracker.DIAGNOSTIC_COLUMNS`);
+  (:func:`plugins.video_tracking.tracker.diagnostic_columns`);
 * ``summary.json`` — frames, speed, parameters, seed, version and scores;
 * ``diagnostics.png`` — the curves of W's Fig. 10, one line per target.
 
@@ -23,12 +23,9 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["StagedOutputs", "write_tracks", "write_diagnostics", "write_summary", "plot_diagnostics",
-           "DIAGNOSTIC_HEADER"]
+from plugins.video_tracking.errors import TrackingError
 
-#: Header of ``diagnostics.csv``.
-DIAGNOSTIC_HEADER = ("frame", "id", "mean_m_target", "mean_m_intersection", "mean_bel", "mean_m_empty", "mean_r",
-                     "particles", "ess", "similarity", "occluded")
+__all__ = ["StagedOutputs", "write_diagnostics", "write_summary", "plot_diagnostics"]
 
 
 class StagedOutputs:
@@ -56,15 +53,11 @@ class StagedOutputs:
     def __init__(self, out_dir: str | PathLike[str]) -> None:
         self.out_dir = Path(out_dir)
         if self.out_dir.exists() and not self.out_dir.is_dir():
-            from plugins.video_tracking.errors import TrackingError
-
             raise TrackingError(f"the output {str(out_dir)!r} exists and is not a directory")
         self._created = not self.out_dir.exists()
         try:
             self.out_dir.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            from plugins.video_tracking.errors import TrackingError
-
             raise TrackingError(f"cannot create the output directory {str(out_dir)!r}: "
                                 f"{exc.strerror or exc}") from None
         self._staged: dict[str, Path] = {}
@@ -103,20 +96,12 @@ class StagedOutputs:
                 pass
 
 
-def write_tracks(path: str | PathLike[str], rows: Sequence[Sequence[float]]) -> None:
-    """Write MOTChallenge rows ``frame,id,x,y,w,h,-1,-1,-1,-1`` (frames and ids as integers, boxes to 0.001 px)."""
-    with open(path, "w", encoding="ascii", newline="\n") as handle:
-        for row in rows:
-            frame, track_id, x, y, w, h = row[:6]
-            handle.write(f"{int(frame)},{int(track_id)},{x:.3f},{y:.3f},{w:.3f},{h:.3f},-1,-1,-1,-1\n")
-
-
 def write_diagnostics(path: str | PathLike[str], records: Sequence[Mapping[str, float]],
-                      header: Sequence[str] = DIAGNOSTIC_HEADER) -> None:
-    """Write one CSV line per frame and target, columns ``header`` (default :data:`DIAGNOSTIC_HEADER`).
+                      header: Sequence[str]) -> None:
+    """Write one CSV line per frame and target, columns ``header``.
 
-    The tracker passes ``("frame", "id")`` and its
-    :func:`~plugins.video_tracking.tracker.diagnostic_columns`, which name the cues.
+    A run passes ``("frame", "id")`` and its tracker's
+    :func:`~plugins.video_tracking.tracker.diagnostic_columns`.
     """
     with open(path, "w", encoding="ascii", newline="") as handle:
         writer = csv.writer(handle, lineterminator="\n")

@@ -1,0 +1,92 @@
+"""Checks of setting values at the plugin's boundary, with messages that name the field.
+
+Every settings dataclass of the plugin (``TrackerConfig``, ``ColourConfig``, ``MotionConfig``
+…) checks its fields once, in ``__post_init__``, with these helpers; the code behind trusts
+them.  A bad value raises :class:`~plugins.video_tracking.errors.TrackingError` (a
+:class:`belief.errors.BeliefError`), never a bare ``ValueError``, so the command line turns
+it into one line.
+
+Examples
+--------
+>>> number("MotionConfig.sigma_pos", 3, minimum=0.0)
+3.0
+>>> integer("TrackerConfig.particles", 0, minimum=1)
+Traceback (most recent call last):
+...
+plugins.video_tracking.errors.TrackingError: TrackerConfig.particles must be an integer >= 1, got 0
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+from collections.abc import Sequence
+
+import numpy as np
+
+from plugins.video_tracking.errors import TrackingError
+
+__all__ = ["number", "integer", "choice", "flag", "fraction", "instance"]
+
+
+def number(name: str, value: object, *, minimum: float | None = None, positive: bool = False,
+           maximum: float | None = None) -> float:
+    """``value`` as a finite float within the bounds (``positive``: strictly above 0)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TrackingError(f"{name} must be a number, got {value!r}")
+    result = float(value)
+    if not math.isfinite(result):
+        raise TrackingError(f"{name} must be finite, got {value!r}")
+    if positive and result <= 0:
+        raise TrackingError(f"{name} must be positive, got {value!r}")
+    if minimum is not None and result < minimum:
+        raise TrackingError(f"{name} must be at least {minimum:g}, got {value!r}")
+    if maximum is not None and result > maximum:
+        raise TrackingError(f"{name} must be at most {maximum:g}, got {value!r}")
+    return result
+
+
+def integer(name: str, value: object, *, minimum: int | None = None, maximum: int | None = None) -> int:
+    """``value`` as an int (a bool is refused) within the bounds."""
+    if isinstance(value, (bool, np.bool_)):
+        raise TrackingError(f"{name} must be an integer, got {value!r}")
+    try:
+        result = operator.index(value)  # type: ignore[arg-type]
+    except TypeError:
+        raise TrackingError(f"{name} must be an integer, got {value!r}") from None
+    if minimum is not None and result < minimum:
+        raise TrackingError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    if maximum is not None and result > maximum:
+        raise TrackingError(f"{name} must be an integer <= {maximum}, got {value!r}")
+    return int(result)
+
+
+def fraction(name: str, value: object, *, allow_zero: bool = True) -> float:
+    """A number in [0, 1] (in (0, 1] without ``allow_zero``)."""
+    interval = "[0, 1]" if allow_zero else "(0, 1]"
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(value) or not 0 <= value <= 1 or (value == 0 and not allow_zero):
+        raise TrackingError(f"{name} must be a number in {interval}, got {value!r}")
+    return float(value)
+
+
+def choice(name: str, value: object, choices: Sequence[str]) -> str:
+    """One of ``choices``; the message lists them."""
+    if not isinstance(value, str) or value not in choices:
+        raise TrackingError(f"{name} must be one of {', '.join(choices)}, got {value!r}")
+    return value
+
+
+def flag(name: str, value: object) -> bool:
+    """True or False (numpy booleans too; not 0 or 1)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TrackingError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
+def instance(name: str, value: object, kind: type) -> object:
+    """``value`` if it is a ``kind`` (a settings dataclass), else an error naming both."""
+    if not isinstance(value, kind):
+        article = "an" if kind.__name__[0] in "AEIOU" else "a"
+        raise TrackingError(f"{name} must be {article} {kind.__name__}, got {type(value).__name__}")
+    return value

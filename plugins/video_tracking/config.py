@@ -1,0 +1,285 @@
+"""The tracker's settings, :class:`TrackerConfig`, checked once when they are made.
+
+Each part of the tracker has its own frozen settings dataclass, defined and given its
+defaults next to the part (``ColourConfig`` in :mod:`~plugins.video_tracking.cues`,
+``MotionConfig`` in :mod:`~plugins.video_tracking.particles`, …); :class:`TrackerConfig`
+gathers them with the choices that assemble the parts (which cues, which weighting
+strategy, which rule).  Every field is checked in ``__post_init__`` and raises
+:class:`~plugins.video_tracking.errors.TrackingError` naming the field; the tracker trusts
+the settings after that.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields, is_dataclass
+from typing import Any
+
+from belief.rules import get_rule
+from belief.errors import BeliefError
+from plugins.video_tracking import checks
+from plugins.video_tracking.adaptive import AdaptiveConfig
+from plugins.video_tracking.background import BackgroundConfig
+from plugins.video_tracking.cues import CUES, ColourConfig, EdgeConfig, LocationConfig
+from plugins.video_tracking.errors import TrackingError, UnknownCueError
+from plugins.video_tracking.fusion import MASSES, WEIGHTS, FusionConfig
+from plugins.video_tracking.initiation import InitiationConfig
+from plugins.video_tracking.particles import RESAMPLERS, MotionConfig
+from plugins.video_tracking.weighting import WEIGHTINGS
+
+__all__ = ["TrackerConfig", "KAPPAS", "DIAGNOSTICS"]
+
+#: The conflict level that drives the adaptive particle count (:attr:`TrackerConfig.kappa`).
+KAPPAS = ("mass", "r")
+
+#: Which diagnostics a run records (:attr:`TrackerConfig.diagnostics`).
+DIAGNOSTICS = ("strategy", "all")
+
+
+@dataclass(frozen=True)
+class TrackerConfig:
+    """Settings of the tracker (SPEC B.3 defaults unless noted).
+
+    Attributes
+    ----------
+    particles : int
+        N, particles per target (the maximum when ``adaptive_particles`` is on).
+    cues : tuple of str
+        Cue names of :data:`plugins.video_tracking.cues.CUES`, in fusion order: the
+        R-weighted rule folds the cues in this order (SPEC Part D), so it is recorded.
+    fusion : {"belief", "adaptive", "sum", "product"}
+        The weighting strategy of :data:`plugins.video_tracking.weighting.WEIGHTINGS`:
+        ``"belief"`` fuses the cues' mass functions with ``rule`` and weighs a particle of
+        target J by ``weight`` of θ_J (W (7), W (32)); ``"adaptive"`` is C's
+        confidence-weighted mix of the product and sum rules (C (11)–(14)), with the
+        occlusion test and the template update of C (15)–(16); ``"sum"`` and ``"product"``
+        combine the cues' own-target likelihoods with equal weights or by their product.
+    rule : str
+        A combination rule of :data:`belief.RULES` (default: the R-weighted rule of SPEC A.4).
+    weight : {"bel", "pls", "betp"}
+        The measure of θ_J that weighs a particle of target J (W (32): Bel).
+    r_mode, empty_mode : str
+        Options of the R-weighted rule (SPEC A.4: the printed inconsistency R of W (10), and
+        the conflict of a target with FA kept on θ_j ∪ FA).
+    masses : {"relative", "normalised"}
+        How a cue's likelihoods become its mass function
+        (:func:`~plugins.video_tracking.fusion.cue_masses`): ``"relative"`` divides each by
+        the best own-target likelihood of the particle's set and gives the unclaimed support
+        to FA; ``"normalised"`` is W (20)–(21) as printed.
+    motion : MotionConfig
+        Noise of the constant-velocity model (W-S2).
+    resampling : str
+        A resampler of :data:`plugins.video_tracking.particles.RESAMPLERS`.
+    ess_threshold : float in [0, 1]
+        Resample when N_eff < threshold·N; 1 resamples every frame (the papers' choice).
+    adaptive_fusion : AdaptiveConfig
+        Settings of C's adaptive fusion, its occlusion test (threshold T) and its template
+        update.
+    template_update : bool
+        Let the appearance templates follow their targets by C (16), frozen while a target
+        is occluded (total similarity C (15) below T), with the strategies that keep fixed
+        templates in their papers (belief, sum, product).  The adaptive strategy always
+        updates its templates: C's method includes it.
+    adaptive_particles : bool
+        Adapt each target's N to its conflict (SPEC B.3): N_{t+1} = N_min + ⌈(N − N_min)·κ⌉
+        with N_min = ⌈N / 2⌉.
+    kappa : {"mass", "r"}
+        The conflict κ of ``adaptive_particles``, per target, as a mean over its particles of
+        the fused cues (with ``rule``, whatever the strategy): ``"mass"`` the mass on target
+        intersections and on ∅ (the non-consensus mass of SPEC B.3); ``"r"`` the
+        inconsistency R of W (10) between the first two cues.
+    location, colour, foreground, edges : LocationConfig, ColourConfig, ColourConfig, EdgeConfig
+        Settings of the location, colour, foreground-masked colour and edge cues.
+    background : BackgroundConfig
+        The background model of the foreground cue and of the automatic initiation.
+    warm_up : int
+        Frames, spread evenly over the whole video, that the background model learns from
+        before tracking starts (0: it learns from the tracked frames only).  Without it the
+        people in view at the first frame are part of the first background.
+    initiation : InitiationConfig or None
+        Start tracks on foreground blobs entering at the image border and end tracks that
+        leave or lose their foreground (SPEC B.4, :mod:`plugins.video_tracking.initiation`);
+        None tracks exactly the targets of the init plan.
+    init_sigma : float
+        Spread in pixels of a newborn target's particles around its box centre (W-S1).
+    diagnostics : {"strategy", "all"}
+        ``"strategy"`` records what the running parts compute anyway (the active
+        strategy's own quantities, the particle count and ESS, and the total similarity
+        when the templates follow their targets); ``"all"`` also computes, every frame, the
+        belief fusion's masses (W (33)–(35), m(∅), R) and C's feature confidences (C (13))
+        and total similarity (C (15)), so that runs of every strategy report the same
+        columns.
+
+    Raises
+    ------
+    TrackingError
+        A bad value of any field (an unknown cue raises :class:`UnknownCueError`, an
+        unknown rule lists the known ones); the message names the field.
+
+    Examples
+    --------
+    >>> TrackerConfig().cues
+    ('colour', 'location', 'foreground')
+    >>> TrackerConfig(cues=("colour", "sound"))
+    Traceback (most recent call last):
+    ...
+    plugins.video_tracking.errors.UnknownCueError: unknown cue 'sound'; known cues: colour, location, foreground, edges
+    """
+
+    particles: int = 100
+    cues: tuple[str, ...] = ("colour", "location", "foreground")
+    fusion: str = "belief"
+    rule: str = "r_rule"
+    weight: str = "bel"
+    r_mode: str = "paper"
+    empty_mode: str = "union"
+    masses: str = "relative"
+    motion: MotionConfig = field(default_factory=lambda: MotionConfig(sigma_pos=3.0, sigma_vel=0.5))
+    resampling: str = "systematic"
+    ess_threshold: float = 1.0
+    adaptive_fusion: AdaptiveConfig = field(default_factory=AdaptiveConfig)
+    template_update: bool = False
+    adaptive_particles: bool = False
+    kappa: str = "mass"
+    location: LocationConfig = field(default_factory=lambda: LocationConfig(fa_mode="gate", reference="predicted"))
+    colour: ColourConfig = field(default_factory=ColourConfig)
+    foreground: ColourConfig = field(default_factory=ColourConfig)
+    edges: EdgeConfig = field(default_factory=EdgeConfig)
+    background: BackgroundConfig = field(default_factory=BackgroundConfig)
+    warm_up: int = 0
+    initiation: InitiationConfig | None = None
+    init_sigma: float = 5.0
+    diagnostics: str = "strategy"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "particles", checks.integer("TrackerConfig.particles", self.particles, minimum=1))
+        cues = (self.cues,) if isinstance(self.cues, str) else tuple(self.cues)
+        if not cues:
+            raise TrackingError("TrackerConfig.cues must name at least one cue")
+        for name in cues:
+            if name not in CUES:
+                raise UnknownCueError(f"unknown cue {name!r}; known cues: {', '.join(CUES)}")
+        if len(set(cues)) != len(cues):
+            raise TrackingError(f"TrackerConfig.cues names a cue twice: {', '.join(cues)}")
+        object.__setattr__(self, "cues", cues)
+        if self.fusion not in WEIGHTINGS:
+            raise TrackingError(f"unknown fusion {self.fusion!r}; known fusions: {', '.join(WEIGHTINGS)}")
+        try:
+            get_rule(self.rule)
+        except (BeliefError, TypeError) as exc:
+            raise TrackingError(f"TrackerConfig.rule: {exc}") from None
+        checks.choice("TrackerConfig.weight", self.weight, WEIGHTS)
+        checks.choice("TrackerConfig.masses", self.masses, MASSES)
+        self.fusion_config()                   # r_mode and empty_mode
+        if self.resampling not in RESAMPLERS:
+            raise TrackingError(f"unknown resampler {self.resampling!r}; known: {', '.join(sorted(RESAMPLERS))}")
+        object.__setattr__(self, "ess_threshold", checks.fraction("TrackerConfig.ess_threshold", self.ess_threshold))
+        object.__setattr__(self, "init_sigma", checks.number("TrackerConfig.init_sigma", self.init_sigma,
+                                                             minimum=0.0))
+        for name, kind in (("motion", MotionConfig), ("location", LocationConfig), ("colour", ColourConfig),
+                           ("foreground", ColourConfig), ("edges", EdgeConfig), ("background", BackgroundConfig),
+                           ("adaptive_fusion", AdaptiveConfig)):
+            checks.instance(f"TrackerConfig.{name}", getattr(self, name), kind)
+        checks.choice("TrackerConfig.kappa", self.kappa, KAPPAS)
+        checks.choice("TrackerConfig.diagnostics", self.diagnostics, DIAGNOSTICS)
+        for name in ("adaptive_particles", "template_update"):
+            object.__setattr__(self, name, checks.flag(f"TrackerConfig.{name}", getattr(self, name)))
+        object.__setattr__(self, "warm_up", checks.integer("TrackerConfig.warm_up", self.warm_up, minimum=0))
+        if self.initiation is not None:
+            checks.instance("TrackerConfig.initiation", self.initiation, InitiationConfig)
+
+    @classmethod
+    def from_settings(cls, settings: Mapping[str, Any], where: str = "settings") -> "TrackerConfig":
+        """Settings from a mapping, as a TOML table or ``--set`` options give them.
+
+        Nested mappings fill the nested settings dataclasses (``{"location": {"sigma": 8}}``),
+        lists become tuples, and ``initiation`` may be a table, ``True`` (the defaults) or
+        ``False`` (off).
+
+        Raises
+        ------
+        TrackingError
+            An unknown key (the message lists the known ones) or a bad value; the message
+            starts with ``where``.
+
+        Examples
+        --------
+        >>> TrackerConfig.from_settings({"particles": 40, "colour": {"bins": 4}}).colour.bins
+        4
+        >>> TrackerConfig.from_settings({"particle": 40})  # doctest: +ELLIPSIS
+        Traceback (most recent call last):
+        ...
+        plugins.video_tracking.errors.TrackingError: settings: unknown key 'particle'; known keys: particles, cues, ...
+        """
+        if not isinstance(settings, Mapping):
+            raise TrackingError(f"{where} must be a table of TrackerConfig settings, got {settings!r}")
+        _check_keys(settings, [f.name for f in fields(cls)], where)
+        defaults = cls()
+        keywords = {}
+        for name, value in settings.items():
+            if name == "initiation":
+                if value is True:
+                    value = {}
+                value = None if value is False or value is None else \
+                    _dataclass(InitiationConfig, value, f"{where}: initiation")
+            elif is_dataclass(getattr(defaults, name)):
+                value = _dataclass(type(getattr(defaults, name)), value, f"{where}: {name}")
+            elif isinstance(value, list):
+                value = tuple(value)
+            keywords[name] = value
+        try:
+            return cls(**keywords)
+        except BeliefError as exc:
+            raise TrackingError(f"{where}: {exc}") from None
+
+    def fusion_config(self) -> FusionConfig:
+        """The :class:`~plugins.video_tracking.fusion.FusionConfig` of these settings."""
+        return FusionConfig(rule=self.rule, weight=self.weight, r_mode=self.r_mode, empty_mode=self.empty_mode,
+                            masses=self.masses)
+
+    def cue_config(self, name: str):
+        """The settings object of cue ``name``."""
+        return {"location": self.location, "colour": self.colour, "foreground": self.foreground,
+                "edges": self.edges}[name]
+
+    @property
+    def uses_background(self) -> bool:
+        """Whether a background model is needed (the foreground cue or the automatic initiation is on)."""
+        return "foreground" in self.cues or self.initiation is not None
+
+    @property
+    def updates_templates(self) -> bool:
+        """Whether the appearance templates follow their targets (C (16)): always for the adaptive strategy."""
+        return self.fusion == "adaptive" or self.template_update
+
+    @property
+    def follows_appearance(self) -> bool:
+        """Whether the total similarity of C (15) is computed every frame (templates, adaptive fusion or all diagnostics)."""
+        return self.updates_templates or self.diagnostics == "all"
+
+    def describe(self) -> str:
+        """How the particles are weighed, in a few words (for titles and messages).
+
+        >>> TrackerConfig().describe(), TrackerConfig(fusion="sum").describe()
+        ('rule r_rule, weight bel', 'sum fusion')
+        """
+        if self.fusion == "belief":
+            return f"rule {self.rule}, weight {self.weight}"
+        return f"{self.fusion} fusion"
+
+
+def _check_keys(mapping: Mapping[str, Any], known: list[str], where: str) -> None:
+    unknown = [key for key in mapping if key not in known]
+    if unknown:
+        raise TrackingError(f"{where}: unknown key {unknown[0]!r}; known keys: {', '.join(known)}")
+
+
+def _dataclass(kind: type, value: Any, where: str):
+    if not isinstance(value, Mapping):
+        raise TrackingError(f"{where} must be a table of {kind.__name__} settings, got {value!r}")
+    _check_keys(value, [f.name for f in fields(kind)], where)
+    values = {k: tuple(v) if isinstance(v, list) else v for k, v in value.items()}
+    try:
+        return kind(**values)
+    except (BeliefError, TypeError) as exc:
+        raise TrackingError(f"{where}: {exc}") from None

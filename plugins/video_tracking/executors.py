@@ -1,0 +1,99 @@
+"""Running many independent tasks: in this process, on local processes, or on a Dask cluster.
+
+:func:`outcomes` calls a function on every item and yields each outcome as it ends, with
+the error message of a failed call instead of raising it, so that one failure does not
+lose the others.  Local processes are spawned (no copy of this process's OpenCV threads or
+open files); a Dask scheduler is reached through the client's
+:class:`concurrent.futures.Executor`, the same code path.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import contextlib
+import os
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any, TypeVar
+
+from plugins.video_tracking.errors import TrackingError
+
+__all__ = ["outcomes", "executor"]
+
+Item = TypeVar("Item")
+
+
+def outcomes(function: Callable[[Item], Any], items: Sequence[Item], *, workers: int | None = None,
+             scheduler: str | None = None) -> Iterator[tuple[Item, Any, str | None]]:
+    """Call ``function`` on every item; yield ``(item, result, None)`` or ``(item, None, error)`` as each ends.
+
+    Parameters
+    ----------
+    function : callable
+        A module-level function (it is sent to other processes).
+    items : sequence
+    workers : int, optional
+        Local processes (default: one per core); 1 runs the items here, one after the other.
+        With ``scheduler="local"``, the number of workers of the local Dask cluster.
+    scheduler : str, optional
+        A Dask scheduler's address (``tcp://host:8786``), or ``"local"`` to start a Dask
+        cluster on this machine (needs the ``dask`` extra).
+
+    Raises
+    ------
+    TrackingError
+        Dask is asked for but missing, or its scheduler cannot be reached.
+
+    Examples
+    --------
+    >>> sorted((item, result) for item, result, _ in outcomes(abs, [-2, 3], workers=1))
+    [(-2, 2), (3, 3)]
+    """
+    if scheduler is None and min(workers or os.cpu_count() or 1, len(items)) == 1:
+        for item in items:
+            try:
+                yield item, function(item), None
+            except Exception as exc:  # noqa: BLE001 - reported with the item it came from
+                yield item, None, f"{type(exc).__name__}: {exc}"
+        return
+    with executor(workers, scheduler, len(items)) as pool:
+        futures = {pool.submit(function, item): item for item in items}
+        try:
+            for future in concurrent.futures.as_completed(futures):
+                try:
+                    result = future.result()
+                except Exception as exc:  # noqa: BLE001 - reported with the item it came from
+                    yield futures[future], None, f"{type(exc).__name__}: {exc}"
+                else:
+                    yield futures[future], result, None
+        except BaseException:
+            for future in futures:
+                future.cancel()
+            raise
+
+
+@contextlib.contextmanager
+def executor(workers: int | None, scheduler: str | None, tasks: int) -> Iterator[concurrent.futures.Executor]:
+    """A process pool of ``min(workers, tasks)`` spawned processes, or a Dask client's executor."""
+    if scheduler is None:
+        import multiprocessing
+
+        with concurrent.futures.ProcessPoolExecutor(min(workers or os.cpu_count() or 1, tasks),
+                                                    mp_context=multiprocessing.get_context("spawn")) as pool:
+            yield pool
+        return
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise TrackingError('a Dask scheduler needs the dask extra: pip install "belief[dask]"') from None
+    with contextlib.ExitStack() as stack:
+        if scheduler == "local":
+            cluster = stack.enter_context(LocalCluster(n_workers=workers or os.cpu_count() or 1,
+                                                       threads_per_worker=1, dashboard_address=None))
+            client = stack.enter_context(Client(cluster))
+        else:
+            try:
+                client = stack.enter_context(Client(scheduler, timeout=30))
+            except (OSError, TimeoutError, ValueError) as exc:
+                raise TrackingError(f"cannot reach the Dask scheduler at {scheduler!r} ({exc})") from None
+        # pure=False: two tasks are never merged into one, whatever their arguments
+        yield client.get_executor(pure=False)

@@ -1,0 +1,177 @@
+"""Running an experiment's grid, resumably, and writing its tables (``belief experiment CONFIG``).
+
+:func:`run_experiment` runs every cell of an
+:class:`~plugins.video_tracking.experiment.Experiment` that is not finished yet
+(:func:`~plugins.video_tracking.runs.run_cell`, in parallel through
+:mod:`~plugins.video_tracking.executors`), saves each finished cell at once under
+``OUT/cells/`` (so an interrupted grid resumes where it stopped, and a failed cell is retried
+alone), and writes the tables of :mod:`~plugins.video_tracking.tables`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from plugins.video_tracking.errors import TrackingError
+from plugins.video_tracking.executors import outcomes
+from plugins.video_tracking.experiment import CELL_FORMAT, Experiment, ExperimentError
+from plugins.video_tracking.runs import run_cell
+from plugins.video_tracking.tables import (
+    RESULT_COLUMNS,
+    RMS_COLUMNS,
+    rms_per_frame,
+    summarise,
+    summary_columns,
+    write_csv,
+    write_text,
+)
+
+__all__ = ["ExperimentResult", "run_experiment"]
+
+
+@dataclass(frozen=True)
+class ExperimentResult:
+    """What :func:`run_experiment` produced.
+
+    Attributes
+    ----------
+    results : list of dict
+        The rows of ``results.csv``, in grid order.
+    rms : list of dict
+        The rows of ``rms.csv`` (W (36)).
+    summary : list of dict
+        The rows of ``summary.csv``.
+    cells : dict of str to dict
+        Every cell's full record by key (see :func:`~plugins.video_tracking.runs.run_cell`),
+        for figures.
+    computed, reused : int
+        Cells run now, and cells found finished in the output folder.
+    files : dict of str to Path
+    """
+
+    results: list[dict[str, Any]]
+    rms: list[dict[str, Any]]
+    summary: list[dict[str, Any]]
+    cells: dict[str, dict[str, Any]] = field(repr=False)
+    computed: int
+    reused: int
+    files: dict[str, Path]
+
+
+def run_experiment(experiment: Experiment, out_dir: str | os.PathLike[str], *, workers: int | None = None,
+                   scheduler: str | None = None, fresh: bool = False, progress: bool = True) -> ExperimentResult:
+    """Run every cell that is not finished yet, then write the tables.
+
+    Parameters
+    ----------
+    experiment : Experiment
+    out_dir : path
+        Receives ``cells/`` (one JSON file per finished cell), ``results.csv``, ``rms.csv``,
+        ``summary.csv`` and ``experiment.json``.
+    workers : int, optional
+        Local processes (default: one per core); 1 runs the cells in this process.  With
+        ``scheduler="local"``, the number of workers of the local Dask cluster.
+    scheduler : str, optional
+        The address of a Dask scheduler (``tcp://host:8786``), or ``"local"`` to start a
+        Dask cluster on this machine; needs the ``dask`` extra
+        (``pip install "belief[dask]"``).  Recorded videos must be readable at the same path
+        on every worker.
+    fresh : bool
+        Run every cell again, even those already finished.
+    progress : bool
+        Show a progress bar (when standard error is a terminal).
+
+    Returns
+    -------
+    ExperimentResult
+
+    Raises
+    ------
+    ExperimentError
+        Some cells failed: the message names them; the finished ones are kept, and running
+        the experiment again retries the others only.
+    """
+    from tqdm import tqdm
+
+    if not isinstance(experiment, Experiment):
+        raise ExperimentError(f"experiment must be an Experiment, got {type(experiment).__name__}")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, (int, np.integer))
+                                or workers < 1):
+        raise ExperimentError(f"workers must be an integer >= 1, got {workers!r}")
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ExperimentError(f"{out} exists and is not a folder")
+    cell_dir = out / "cells"
+    cell_dir.mkdir(parents=True, exist_ok=True)
+    write_text(out / "experiment.json", json.dumps(experiment.to_dict(), indent=2, sort_keys=True) + "\n")
+
+    cells = experiment.cells()
+    records: dict[str, dict[str, Any]] = {}
+    todo = []
+    for cell in cells:
+        record = None if fresh else _read_cell(cell_dir / f"{cell.key}.json", cell.key)
+        if record is None:
+            todo.append(cell)
+        else:
+            records[cell.key] = record
+    reused = len(records)
+    failures = []
+    if todo:
+        bar = tqdm(total=len(todo), unit="run", desc=experiment.name, file=sys.stderr, leave=False,
+                   disable=not progress or not sys.stderr.isatty())
+        try:
+            for cell, record, error in outcomes(run_cell, todo, workers=workers, scheduler=scheduler):
+                bar.update(1)
+                if error is not None:
+                    failures.append((cell, error))
+                    continue
+                text = json.dumps(record, allow_nan=False, default=_json_default)
+                write_text(cell_dir / f"{cell.key}.json", text + "\n")
+                records[cell.key] = json.loads(text)    # as a reused cell reads: lists, not tuples
+        except TrackingError as exc:
+            if isinstance(exc, ExperimentError):
+                raise
+            raise ExperimentError(str(exc)) from None
+        finally:
+            bar.close()
+
+    finished = [cell for cell in cells if cell.key in records]
+    results = [records[cell.key]["row"] for cell in finished]
+    rms = rms_per_frame([(cell.sequence.name, cell.method.name, records[cell.key]) for cell in finished])
+    summary = summarise(results)
+    files = {"results.csv": out / "results.csv", "rms.csv": out / "rms.csv", "summary.csv": out / "summary.csv",
+             "experiment.json": out / "experiment.json"}
+    write_csv(files["results.csv"], RESULT_COLUMNS, results)
+    write_csv(files["rms.csv"], RMS_COLUMNS, rms)
+    write_csv(files["summary.csv"], summary_columns(), summary)
+    if failures:
+        first, message = failures[0]
+        raise ExperimentError(f"{len(failures)} of {len(cells)} runs failed (first: {first.label}: {message}); "
+                              f"the {len(finished)} finished runs are saved in {cell_dir}, and running the "
+                              f"experiment again retries the others")
+    return ExperimentResult(results, rms, summary, {c.key: records[c.key] for c in finished},
+                            len(todo), reused, files)
+
+
+def _read_cell(path: Path, key: str) -> dict[str, Any] | None:
+    """A finished cell's record, or None when it is missing, unreadable or of another grid."""
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(record, dict) or record.get("format") != CELL_FORMAT or record.get("key") != key:
+        return None
+    return record
+
+
+def _json_default(value: Any) -> Any:
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"not JSON-ready: {type(value).__name__}")

@@ -1,0 +1,125 @@
+"""MOTChallenge text files: reading track, ground-truth and box rows, writing tracks.
+
+A MOTChallenge file has one box per line, ``frame,id,x,y,w,h[,flag,...]``, with 1-based
+frames and the box's top-left corner ``(x, y)`` and size ``(w, h)`` in pixels (1-based:
+the top-left pixel of the image is at (1, 1)).  The tracker works in 0-based pixels and
+converts at these readers and writers.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from os import PathLike
+
+import numpy as np
+
+from belief.textfiles import read_text
+from plugins.video_tracking.errors import TrackFileError
+
+__all__ = ["MOT_COLUMNS", "read_mot", "write_tracks"]
+
+#: Columns of the array returned by :func:`read_mot`.  ``flag`` is the 7th column of the
+#: file: for ground truth, 0 means "not scored"; for tracker output it is a confidence,
+#: which the evaluation does not use.  Files with only 6 columns get a flag of 1.
+MOT_COLUMNS = ("frame", "id", "x", "y", "width", "height", "flag")
+
+_FRAME, _ID, _X, _Y, _W, _H, _FLAG = range(len(MOT_COLUMNS))
+_MIN_FIELDS, _MAX_FIELDS = 6, 10
+
+
+def read_mot(path: str | PathLike[str]) -> np.ndarray:
+    """Read a MOTChallenge track or ground-truth file.
+
+    Each non-blank line is ``frame,id,x,y,w,h[,flag[,a[,b[,c]]]]``: 6 to 10 numbers
+    separated by commas (or, if a line has no comma, by white space).  Columns past the
+    7th (class and visibility, or world coordinates) are checked to be numbers and
+    dropped.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file to read.
+
+    Returns
+    -------
+    rows : ndarray of float, shape (N, 7)
+        One row per box, columns :data:`MOT_COLUMNS`: frame, id, x, y, width, height,
+        flag (1 where the file has only 6 columns), in file order.
+
+    Raises
+    ------
+    TrackFileError
+        The file is missing or unreadable, holds no rows, or a line (named with its
+        number) has the wrong number of fields, a field that is not a finite number, a
+        frame or id that is not an integer, a negative width or height, or repeats the
+        id of an earlier line of the same frame.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = pathlib.Path(folder) / "gt.txt"
+    ...     _ = path.write_text("1,7,10,20,30,40,1,-1,-1,-1\\n2,7,12,20,30,40,0,-1,-1,-1\\n")
+    ...     read_mot(path)
+    array([[ 1.,  7., 10., 20., 30., 40.,  1.],
+           [ 2.,  7., 12., 20., 30., 40.,  0.]])
+    """
+    name = str(path)
+    text = read_text(path, "track file", TrackFileError, encoding="utf-8-sig")
+
+    rows: list[list[float]] = []
+    first_line_of: dict[tuple[int, int], int] = {}
+    for line_number, line in enumerate(text.splitlines(), start=1):
+        stripped = line.strip()
+        if not stripped:
+            continue
+        where = f"{name}, line {line_number}"
+        fields_ = [f.strip() for f in stripped.split(",")] if "," in stripped else stripped.split()
+        if not _MIN_FIELDS <= len(fields_) <= _MAX_FIELDS:
+            raise TrackFileError(
+                f"{where}: expected {_MIN_FIELDS} to {_MAX_FIELDS} fields "
+                f"(frame,id,x,y,w,h,flag,...), got {len(fields_)}")
+        values = []
+        for column, field in enumerate(fields_, start=1):
+            try:
+                value = float(field)
+            except ValueError:
+                raise TrackFileError(f"{where}: field {column} is not a number: {field!r}") from None
+            if not math.isfinite(value):
+                raise TrackFileError(f"{where}: field {column} is not finite: {field!r}")
+            values.append(value)
+        frame, track_id, _, _, width, height = values[:6]
+        for label, value in (("frame", frame), ("id", track_id)):
+            if value != int(value):
+                raise TrackFileError(f"{where}: the {label} must be an integer, got {value:g}")
+        if width < 0 or height < 0:
+            raise TrackFileError(f"{where}: negative box size {width:g} x {height:g}")
+        key = (int(frame), int(track_id))
+        if key in first_line_of:
+            raise TrackFileError(
+                f"{where}: frame {key[0]} has id {key[1]} twice (first on line {first_line_of[key]})")
+        first_line_of[key] = line_number
+        rows.append(values[:7] if len(values) > 6 else values + [1.0])
+    if not rows:
+        raise TrackFileError(f"{name}: no boxes in the file (it is empty)")
+    return np.asarray(rows, dtype=float)
+
+
+
+def write_tracks(path: str | PathLike[str], rows: Sequence[Sequence[float]]) -> None:
+    """Write MOTChallenge rows ``frame,id,x,y,w,h,-1,-1,-1,-1`` (frames and ids as integers, boxes to 0.001 px).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = pathlib.Path(folder) / "tracks.txt"
+    ...     write_tracks(path, [[1, 7, 10.0, 20.5, 30.0, 40.0]])
+    ...     path.read_text()
+    '1,7,10.000,20.500,30.000,40.000,-1,-1,-1,-1\\n'
+    """
+    with open(path, "w", encoding="ascii", newline="\n") as handle:
+        for row in rows:
+            frame, track_id, x, y, w, h = row[:6]
+            handle.write(f"{int(frame)},{int(track_id)},{x:.3f},{y:.3f},{w:.3f},{h:.3f},-1,-1,-1,-1\n")

@@ -1,0 +1,204 @@
+"""A whole tracking run: frames in, files out (``belief track``).
+
+:func:`run` opens the source, makes a :class:`~plugins.video_tracking.tracker.Tracker`,
+consumes its frame results while showing progress and timing the tracker's own work, and
+writes the run's files (:mod:`~plugins.video_tracking.outputs`), scored against a ground
+truth when one is given.  The tracker itself never touches a file.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import asdict, dataclass, field
+from os import PathLike
+
+import numpy as np
+
+from plugins.video_tracking import outputs
+from plugins.video_tracking.config import TrackerConfig
+from plugins.video_tracking.errors import InitError, TrackingError
+from plugins.video_tracking.initiation import InitPlan
+from plugins.video_tracking.motfiles import read_mot, write_tracks
+from plugins.video_tracking.sources import open_source
+from plugins.video_tracking.tracker import Tracker
+
+__all__ = ["Summary", "run"]
+
+
+@dataclass(frozen=True)
+class Summary:
+    """What a :func:`run` did.
+
+    Attributes
+    ----------
+    frames : int
+        Frames processed.
+    tracking_fps : float
+        Frames per second of the tracker alone (decoding and output excluded).
+    overall_fps : float
+        Frames per second of the whole run (decoding and writing included).
+    tracks : ndarray, shape (M, 10)
+        The rows of ``tracks.txt``.
+    scores : Scores or None
+        The evaluation against the ground truth, when it is known.
+    files : dict of str to Path
+        The output files by name.
+    diagnostics : list of dict
+        The rows of ``diagnostics.csv`` (frame, id and the diagnostic columns), unrounded.
+    """
+
+    frames: int
+    tracking_fps: float
+    overall_fps: float
+    tracks: np.ndarray
+    scores: object | None
+    files: dict
+    diagnostics: list = field(default_factory=list, repr=False)
+
+    def to_dict(self) -> dict:
+        """The JSON-ready part (no arrays)."""
+        return {"frames": self.frames, "tracking_fps": self.tracking_fps, "overall_fps": self.overall_fps,
+                "scores": None if self.scores is None else self.scores.to_dict(),
+                "files": {k: str(v) for k, v in self.files.items()}}
+
+
+def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), out_dir: str | PathLike[str] = "track",
+        seed: int = 0, write_video: bool = True, progress: bool = True, gt: np.ndarray | str | None = None,
+        extra_outputs: dict | None = None, write_plot: bool = True) -> Summary:
+    """Track ``source`` and write the outputs into ``out_dir``.
+
+    Parameters
+    ----------
+    source : path, Scene or ndarray of uint8, shape (T, H, W, 3)
+        A video file (decoded with OpenCV, frame by frame), a rendered synthetic scene, or frames.
+    init : InitPlan or None
+        Births and deaths of the targets (:func:`~plugins.video_tracking.initiation.init_from_gt`,
+        :func:`~plugins.video_tracking.initiation.read_init_boxes`); None leaves them all to
+        the automatic initiation (``config.initiation``).
+    config : TrackerConfig
+        With ``config.warm_up`` > 0 the background model first learns from that many frames
+        spread over the whole source (a video file is then decoded twice).
+    out_dir : path
+        Receives ``tracks.txt``, ``diagnostics.csv``, ``diagnostics.png`` (unless
+        ``write_plot`` is false), ``annotated.avi`` (unless ``write_video`` is false) and
+        ``summary.json``, written last.
+    seed : int
+        Seed of the run's only random generator.
+    progress : bool
+        Show a progress bar on standard error (only when it is a terminal).
+    gt : ndarray or path, optional
+        Ground truth to score the tracks against (:func:`~plugins.video_tracking.evaluation.evaluate`).
+    extra_outputs : dict of str to callable, optional
+        Further files ``name -> write(path)``, committed with the others.
+    write_plot : bool
+        Draw ``diagnostics.png``.
+
+    Returns
+    -------
+    Summary
+
+    Raises
+    ------
+    TrackingError
+        Unreadable video (:class:`VideoError`), boxes outside the image (:class:`InitError`), …
+        On any error the staged files are deleted: nothing that looks complete is left.
+    """
+    from tqdm import tqdm
+
+    from belief import __version__
+    from plugins.video_tracking.evaluation import evaluate
+    from plugins.video_tracking.video import AnnotatedVideoWriter
+
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise TrackingError(f"the seed must be a non-negative integer, got {seed!r}")
+    if init is not None and not isinstance(init, InitPlan):
+        raise TrackingError(f"init must be an InitPlan or None, got {type(init).__name__}")
+    if not isinstance(config, TrackerConfig):
+        raise TrackingError(f"config must be a TrackerConfig, got {type(config).__name__}")
+    if init is None and config.initiation is None:
+        raise InitError("nothing to track: give an init plan or turn on the automatic initiation")
+    started = time.perf_counter()
+    frames = open_source(source)
+    try:
+        gt_rows = None
+        if gt is not None:
+            gt_rows = read_mot(gt) if isinstance(gt, (str, PathLike)) else np.asarray(gt, dtype=np.float64)
+        if init is not None:
+            init.check_image(frames.width, frames.height)
+        staged = outputs.StagedOutputs(out_dir)
+    except BaseException:
+        frames.close()
+        raise
+    try:
+        tracker = Tracker(config, init, np.random.default_rng(int(seed)))
+        if config.warm_up > 0 and tracker.background is not None:
+            tracker.warm_up(frames.spread(config.warm_up))
+        writer = AnnotatedVideoWriter(staged.path("annotated.avi"), frames.fps) if write_video else None
+        rows: list[list[float]] = []
+        records: list[dict[str, float]] = []
+        tracking_seconds = 0.0
+        count = 0
+        bar = tqdm(total=frames.count, unit="frame", desc="tracking", file=sys.stderr, leave=False,
+                   disable=not progress or not sys.stderr.isatty())
+        shown: list[np.ndarray] = []
+
+        def remembered():
+            # The annotated video draws each result on the frame it came from.
+            for image in frames:
+                shown[:] = [image]
+                yield image
+
+        try:
+            for result in tracker.track(remembered()):
+                tracking_seconds += result.seconds
+                frame_rows = result.mot_rows()
+                for row, estimate in zip(frame_rows, result.estimates):
+                    if not np.isfinite(row).all():
+                        raise TrackingError(f"frame {result.frame}: target {estimate.id} has a non-finite estimate")
+                rows += frame_rows
+                records += result.diagnostics.rows(result.frame)
+                if writer is not None:
+                    writer.write(shown[0], result.frame, [(e.id, e.box) for e in result.estimates])
+                count += 1
+                bar.update(1)
+        finally:
+            bar.close()
+            if writer is not None:
+                writer.close()
+        if count == 0:
+            raise TrackingError(f"{frames.name}: no frame to track")
+        tracks = np.array(rows, dtype=np.float64).reshape(-1, 10)
+        write_tracks(staged.path("tracks.txt"), rows)
+        outputs.write_diagnostics(staged.path("diagnostics.csv"), records, ("frame", "id") + tracker.diagnostic_columns)
+        if write_plot:
+            outputs.plot_diagnostics(staged.path("diagnostics.png"), records,
+                                     title=f"{frames.name}: {config.describe()}",
+                                     threshold=config.adaptive_fusion.threshold)
+        for name, write in (extra_outputs or {}).items():
+            write(staged.path(name))
+        scores = evaluate(gt_rows, tracks) if gt_rows is not None else None
+        overall = time.perf_counter() - started
+        tracking_fps = count / tracking_seconds if tracking_seconds > 0 else float("inf")
+        overall_fps = count / overall if overall > 0 else float("inf")
+        summary = {
+            "source": frames.name,
+            "frames": count,
+            "targets": len({int(row[1]) for row in rows}),
+            "track_rows": len(rows),
+            "fps": {"tracking": tracking_fps, "overall": overall_fps, "decoding_seconds": frames.decode_seconds,
+                    "tracking_seconds": tracking_seconds, "overall_seconds": overall},
+            "seed": int(seed),
+            "init": init.source if init is not None else "automatic initiation",
+            "parameters": asdict(config),
+            "version": __version__,
+            "scores": scores.to_dict() if scores is not None else None,
+        }
+        outputs.write_summary(staged.path("summary.json"), summary)
+        files = staged.commit()
+    except BaseException:
+        staged.abort()
+        raise
+    finally:
+        frames.close()
+    return Summary(count, tracking_fps, overall_fps, tracks, scores, files, records)

@@ -1,0 +1,134 @@
+"""One run of an experiment's grid: track a cell's sequence with its settings and seed, and score it.
+
+:func:`run_cell` consumes the tracker's frame results directly (no file is written) and
+returns a JSON-ready record: the row of ``results.csv``, the centre errors of every target
+for ``rms.csv`` (W (36)), the per-frame curves of W (33)–(35) and C (15), and the tracks.
+It runs on a worker (a local process or a Dask worker): a synthetic scene is rendered
+there, and a recorded video must be readable at the same path.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from plugins.video_tracking.evaluation import evaluate, matched_pairs
+from plugins.video_tracking.experiment import CELL_FORMAT, Cell
+from plugins.video_tracking.initiation import init_from_gt
+from plugins.video_tracking.sources import open_source
+from plugins.video_tracking.tracker import Tracker
+
+__all__ = ["run_cell", "CURVE_COLUMNS"]
+
+#: The diagnostics a record keeps per frame and target (W (33)–(35) and C (15)); None where a
+#: run does not compute one.
+CURVE_COLUMNS = ("mean_m_target", "mean_m_intersection", "mean_bel", "similarity")
+
+
+def run_cell(cell: Cell) -> dict[str, Any]:
+    """Track one cell and score it.
+
+    Parameters
+    ----------
+    cell : Cell
+
+    Returns
+    -------
+    dict
+        ``row``, the row of ``results.csv``
+        (:data:`~plugins.video_tracking.tables.RESULT_COLUMNS`); ``errors`` (target id →
+        list of ``[frame, centre error]``); ``curves`` (rows ``frame, id`` and
+        :data:`CURVE_COLUMNS`); ``tracks`` (the rows of ``tracks.txt``); ``format`` and
+        ``key`` (which cell, in which file format).
+    """
+    started = time.perf_counter()
+    config = cell.config()
+    frames, gt = cell.sequence.load()
+    plan = init_from_gt(gt, source=f"ground truth of {cell.sequence.name}") if cell.sequence.init == "gt" else None
+    rows: list[list[float]] = []
+    diagnostics: list[dict[str, float]] = []
+    tracking_seconds = 0.0
+    with open_source(frames) as source:
+        tracker = Tracker(config, plan, np.random.default_rng(cell.seed))
+        if config.warm_up > 0 and tracker.background is not None:
+            tracker.warm_up(source.spread(config.warm_up))
+        count = 0
+        for result in tracker.track(source):
+            tracking_seconds += result.seconds
+            rows += result.mot_rows()
+            diagnostics += result.diagnostics.rows(result.frame)
+            count += 1
+    seconds = time.perf_counter() - started
+    tracks = np.array(rows, dtype=np.float64).reshape(-1, 10)
+    scores = evaluate(gt, tracks)
+    errors = _centre_errors(gt, tracks, by_id=cell.sequence.init == "gt")
+    squared = [e * e for pairs in errors.values() for _, e in pairs]
+
+    def mean_of(column: str) -> float:
+        values = [row[column] for row in diagnostics if column in row and math.isfinite(row[column])]
+        return float(np.mean(values)) if values else math.nan
+
+    row = {
+        "sequence": cell.sequence.name,
+        "method": cell.method.name,
+        "rule": config.rule if config.fusion == "belief" else "",
+        "fusion": config.fusion,
+        "cues": "+".join(config.cues),
+        "seed": cell.seed,
+        "particles": config.particles,
+        "frames": count,
+        "mota": scores.mota, "motp": scores.motp, "idf1": scores.idf1,
+        "precision": scores.precision, "recall": scores.recall,
+        "id_switches": scores.id_switches, "false_positives": scores.false_positives,
+        "false_negatives": scores.false_negatives, "matched_pairs": scores.matched_pairs,
+        "num_objects": scores.num_objects,
+        "mean_centre_error": scores.mean_centre_error, "median_centre_error": scores.median_centre_error,
+        "rms_error": math.sqrt(math.fsum(squared) / len(squared)) if squared else math.nan,
+        "mean_particles": mean_of("particles"),
+        "occluded_share": mean_of("occluded"),
+        "seconds": seconds,
+        "tracking_fps": count / tracking_seconds if tracking_seconds > 0 else math.inf,
+        "overall_fps": count / seconds if seconds > 0 else math.inf,
+    }
+    # NaN (a ratio without a denominator, e.g. MOTP without any match) is saved as null
+    row = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}
+    curves = [[int(r["frame"]), int(r["id"])] + [_finite(r.get(c)) for c in CURVE_COLUMNS] for r in diagnostics]
+    return {"format": CELL_FORMAT, "key": cell.key, "row": row,
+            "errors": {str(k): v for k, v in errors.items()}, "curves": curves,
+            "tracks": [[float(v) for v in r] for r in tracks]}
+
+
+def _finite(value: Any) -> float | None:
+    if value is None or not math.isfinite(value):
+        return None
+    return float(value)
+
+
+def _centre_errors(gt: np.ndarray, tracks: np.ndarray, by_id: bool) -> dict[int, list[list[float]]]:
+    """Per scored ground-truth target: ``[frame, centre error]`` of each frame it has an estimate.
+
+    ``by_id``: the estimate is the track with the target's id, whatever its overlap; otherwise
+    it is the track paired with the target in that frame by the scoring (IoU ≥ 0.5,
+    :func:`~plugins.video_tracking.evaluation.matched_pairs`).
+    """
+    gt = np.asarray(gt, dtype=np.float64)
+    tracks = np.asarray(tracks, dtype=np.float64).reshape(-1, 10)
+    if by_id:
+        if gt.shape[1] > 6:
+            gt = gt[gt[:, 6] != 0]
+
+        def centres(rows: np.ndarray) -> np.ndarray:
+            return rows[:, 2:4] + rows[:, 4:6] / 2.0
+
+        estimate = {(int(f), int(i)): c for (f, i), c in zip(tracks[:, :2], centres(tracks))}
+        rows = [(int(f), int(i), float(np.hypot(*(estimate[int(f), int(i)] - c))))
+                for (f, i), c in zip(gt[:, :2], centres(gt)) if (int(f), int(i)) in estimate]
+    else:
+        rows = [(int(f), int(i), float(e)) for f, i, _, e in matched_pairs(gt, tracks)]
+    errors: dict[int, list[list[float]]] = {}
+    for frame, target, error in sorted(rows):
+        errors.setdefault(target, []).append([frame, error])
+    return dict(sorted(errors.items()))
