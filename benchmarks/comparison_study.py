@@ -8,7 +8,7 @@ One command regenerates the whole results page of the documentation::
     python benchmarks/comparison_study.py --data DIR       # another copy of the PETS sequence
 
 The grid is ``benchmarks/comparison.toml`` (5 sequences x 9 methods x 5 seeds), run by
-:func:`plugins.video_tracking.experiment.run_experiment`, so ``belief experiment
+:func:`plugins.video_tracking.grid.run_experiment`, so ``belief experiment
 benchmarks/comparison.toml --data DIR`` gives the same ``results.csv``.  Finished runs are
 kept in ``--runs`` (default ``comparison_runs/``), so an interrupted study resumes.  The page
 (``docs/results.md``), its tables (``docs/results/*.csv``) and its figures
@@ -34,7 +34,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from plugins.video_tracking import scenes  # noqa: E402
-from plugins.video_tracking.experiment import load_experiment, run_experiment  # noqa: E402
+from plugins.video_tracking.experiment import load_experiment  # noqa: E402
+from plugins.video_tracking.grid import run_experiment  # noqa: E402
 
 CONFIG = ROOT / "benchmarks" / "comparison.toml"
 DEFAULT_DATA = ROOT.parent / "shared" / "data"
@@ -318,7 +319,7 @@ def findings(summary: dict, sequences: list[str], methods: list[str]) -> list[st
 
 def same_runs(result, first: str, second: str) -> bool:
     """Whether two methods gave the same scores on every sequence and seed (floats to 1e-9)."""
-    from plugins.video_tracking.experiment import SCORE_COLUMNS
+    from plugins.video_tracking.tables import SCORE_COLUMNS
 
     rows = defaultdict(dict)
     for row in result.results:

@@ -24,8 +24,8 @@ def check_boxes(boxes, what: str = "boxes", *, positive: bool = True, image_shap
 
     Parameters
     ----------
-    boxes : array_like, shape (n, 4) or (4,)
-        ``x, y, w, h`` per box; one box may be given flat.  An empty list is (0, 4).
+    boxes : array_like, shape (n, 4)
+        ``x, y, w, h`` per box.  An empty list is (0, 4).
     what : str
         How the message names the boxes ("ground-truth boxes", "the birth box of target 3").
     positive : bool
@@ -48,7 +48,7 @@ def check_boxes(boxes, what: str = "boxes", *, positive: bool = True, image_shap
 
     Examples
     --------
-    >>> check_boxes([10, 20, 8, 16])
+    >>> check_boxes([[10, 20, 8, 16]])
     array([[10., 20.,  8., 16.]])
     >>> check_boxes([[0, 0, 0, 5]], "track boxes")
     Traceback (most recent call last):
@@ -65,8 +65,6 @@ def check_boxes(boxes, what: str = "boxes", *, positive: bool = True, image_shap
         raise error(f"{what}: boxes must be numbers x, y, w, h, got {boxes!r}") from None
     if array.size == 0:
         return array.reshape(0, 4)
-    if array.ndim == 1 and array.size == 4:
-        array = array.reshape(1, 4)
     if array.ndim != 2 or array.shape[1] != 4:
         raise error(f"{what}: boxes must have shape (n, 4) (x, y, w, h), got {array.shape}")
     finite = np.isfinite(array).all(axis=1)

@@ -31,6 +31,19 @@ def _cues(text: str) -> tuple[str, ...]:
     return tuple(name.strip() for name in text.split(",") if name.strip())
 
 
+def _integer(minimum: int):
+    """An argparse type: an integer of at least ``minimum`` (a bad value is a command-line error)."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"must be an integer >= {minimum}, got {value}")
+        return value
+    return parse
+
+
 def parse_setting(text: str) -> tuple[list[str], Any]:
     """``KEY=VALUE`` of ``--set``: a dotted key path and a TOML value (bare words are text).
 
@@ -102,8 +115,6 @@ def _cmd_track(args: argparse.Namespace) -> int:
     from plugins.video_tracking.initiation import init_from_gt, read_init_boxes
     from plugins.video_tracking.runner import run
 
-    if args.seed < 0:
-        raise TrackingError(f"--seed must be a non-negative integer, got {args.seed}")
     config = TrackerConfig.from_settings(_settings(args), "belief track")
     progress = not args.no_progress
 
@@ -168,8 +179,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--gt", metavar="GT.txt", help="MOTChallenge ground truth to score the tracks against "
                                                   "(implied by --init-from-gt)")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")
-    p.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
-    p.add_argument("--particles", type=int, metavar="N", help="particles per target (default 100)")
+    p.add_argument("--seed", type=_integer(0), default=0, metavar="S", help="random seed (default 0)")
+    p.add_argument("--particles", type=_integer(1), metavar="N", help="particles per target (default 100)")
     p.add_argument("--cues", metavar="LIST", help="comma-separated cues in fusion order, of colour, location, "
                                                   "foreground, edges (default colour,location,foreground)")
     p.add_argument("--fusion", choices=["belief", "adaptive", "sum", "product"],
@@ -184,7 +195,7 @@ def register(subparsers: Any) -> None:
                         "the adaptive fusion always does")
     p.add_argument("--adaptive-particles", action="store_true",
                    help="adapt each target's particle count to the conflict between its cues (at most --particles)")
-    p.add_argument("--warm-up", type=int, metavar="N",
+    p.add_argument("--warm-up", type=_integer(0), metavar="N",
                    help=f"frames spread over the video that the background model learns from first "
                         f"(default {AUTOMATIC_WARM_UP} without an init file, else 0)")
     p.add_argument("--diagnostics", choices=["strategy", "all"],
@@ -286,7 +297,7 @@ def register_experiment(subparsers: Any) -> None:
     p.add_argument("--out", metavar="DIR", help="output folder (default: CONFIG without its suffix)")
     p.add_argument("--data", metavar="DIR", help="folder of the relative video and gt paths (default: CONFIG's "
                                                   "folder)")
-    p.add_argument("--workers", type=int, metavar="N", help="local processes, or local Dask workers "
+    p.add_argument("--workers", type=_integer(1), metavar="N", help="local processes, or local Dask workers "
                                                              "(default: one per core)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run on the Dask scheduler at ADDRESS "
                                                            "(tcp://host:8786), or 'local' for a Dask cluster on "

@@ -80,6 +80,8 @@ Examples
 from __future__ import annotations
 
 import contextlib
+import dataclasses
+import functools
 import hashlib
 import json
 import os
@@ -180,7 +182,7 @@ class SequenceSpec:
         from plugins.video_tracking.motfiles import read_mot
 
         if self.scene is not None:
-            scene = scenes.render(scenes.PRESETS[self.scene](self.scene_seed))
+            scene = _rendered(self.scene, self.scene_seed, self.frames)
             frames, gt = scene.frames, scene.ground_truth
         else:
             frames, gt = self.video, read_mot(self.gt)
@@ -193,6 +195,23 @@ class SequenceSpec:
             frames = frames[: self.frames]
             gt = gt[gt[:, 0] <= self.frames]
         return frames, gt
+
+
+@functools.lru_cache(maxsize=4)
+def _rendered(name: str, seed: int, frames: int | None):
+    """A preset scene, rendered once per process for all the methods and seeds that track it.
+
+    A scene cut to its first frames is rendered to that length only: a shorter scene begins
+    with exactly the frames of a longer one.
+    """
+    from plugins.video_tracking import scenes
+
+    config = scenes.PRESETS[name](seed)
+    if frames is not None and frames < config.n_frames:
+        config = dataclasses.replace(config, n_frames=frames)
+    scene = scenes.render(config)
+    scene.frames.flags.writeable = False
+    return scene
 
 
 @dataclass(frozen=True)

@@ -97,7 +97,7 @@ class TargetInit:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "id", checks.integer("a target id", self.id))
-        (box,) = check_boxes(self.box, f"the box of target {self.id}", error=InitError)
+        (box,) = check_boxes([self.box], f"the box of target {self.id}", error=InitError)
         first = checks.integer(f"the first frame of target {self.id}", self.first_frame)
         last = None if self.last_frame is None else \
             checks.integer(f"the last frame of target {self.id}", self.last_frame)

@@ -156,7 +156,7 @@ class TrackManager:
         if any(t.id == birth.id for t in self.targets):
             raise InitError(f"target {birth.id} is already being tracked")
         source = self.plan.source if self.plan is not None and self.plan.source else "init"
-        check_boxes(birth.box, f"{source}: the box of target {birth.id}", image_shape=image.shape[:2],
+        check_boxes([birth.box], f"{source}: the box of target {birth.id}", image_shape=image.shape[:2],
                     error=InitError)
         x, y, w, h = birth.box
         centre = (x + w / 2.0, y + h / 2.0)

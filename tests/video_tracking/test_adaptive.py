@@ -12,7 +12,7 @@ import pytest
 
 from plugins.video_tracking.adaptive import (
     AdaptiveConfig,
-    AdaptiveState,
+    AdaptiveWeighting,
     feature_confidences,
     feature_entropies,
     feature_spreads,
@@ -25,6 +25,7 @@ from plugins.video_tracking.adaptive import (
 )
 from plugins.video_tracking.errors import TrackingError
 from plugins.video_tracking.particles import DegenerateWeightsWarning
+from plugins.video_tracking.weighting import Evidence
 
 EPS = 1e-6
 SQUARE = np.array([[0.0, 0.0], [2.0, 0.0], [0.0, 2.0], [2.0, 2.0]])  # corners of a 2-px square
@@ -38,6 +39,26 @@ LAM_TWO = np.array([[0.25, 0.75]])
 
 def _per_target_sums(log_weights, owner, n_targets):
     return np.bincount(owner, weights=np.exp(log_weights), minlength=n_targets)
+
+
+def weigh(config, positions, log_p, owner, rng, similarity=None):
+    """The adaptive strategy on own-target log-likelihoods ``log_p`` (P, c): log-weights and λ.
+
+    The evidence's scores hold ``log_p`` in the owner's column; the other hypotheses do not
+    enter C (14).
+    """
+    n_targets = int(np.max(owner)) + 1
+    scores = []
+    for column in np.asarray(log_p, dtype=float).T:
+        table = np.full((len(column), n_targets + 1), -5.0)
+        table[np.arange(len(column)), owner] = column
+        scores.append(table)
+    cues = tuple(f"cue{k}" for k in range(len(scores)))
+    weighing = AdaptiveWeighting(config, cues, rng).weigh(
+        Evidence(tuple(scores), np.asarray(owner), np.asarray(positions, dtype=float),
+                 None if similarity is None else np.asarray(similarity, dtype=float), cues))
+    assert tuple(weighing.diagnostics) == tuple(f"confidence_{c}" for c in cues)
+    return weighing.log_weights, weighing.confidences
 
 
 # -- C (12): entropies ----------------------------------------------------------------------------
@@ -307,8 +328,7 @@ def test_target_with_one_particle():
     positions = np.vstack([SQUARE, [[50.0, 50.0]]])
     owner = np.array([0, 0, 0, 0, 1])
     log_p = np.array([[0.0, -1.0], [-1.0, 0.0], [-2.0, -1.0], [0.0, 0.0], [-9.0, -4.0]])
-    state = AdaptiveState(n_targets=2)
-    log_weights, lam = state.step(positions, log_p, owner, np.random.default_rng(0))
+    log_weights, lam = weigh(AdaptiveConfig(), positions, log_p, owner, np.random.default_rng(0))
     assert np.isfinite(log_weights).all() and np.isfinite(lam).all()
     np.testing.assert_allclose(lam[1], [0.5, 0.5])
     assert log_weights[4] == pytest.approx(0.0, abs=1e-12)
@@ -320,8 +340,7 @@ def test_all_equal_likelihoods():
     # with keep = 1 → 2 + ε), so λ = (½, ½) and every particle gets ¼.
     log_p = np.full((4, 2), -12.0)
     owner = np.zeros(4, int)
-    state = AdaptiveState(AdaptiveConfig(keep=1.0), n_targets=1)
-    log_weights, lam = state.step(SQUARE, log_p, owner, np.random.default_rng(0))
+    log_weights, lam = weigh(AdaptiveConfig(keep=1.0), SQUARE, log_p, owner, np.random.default_rng(0))
     np.testing.assert_allclose(lam, [[0.5, 0.5]])
     np.testing.assert_allclose(np.exp(log_weights), 0.25, rtol=1e-12)
     np.testing.assert_allclose(feature_entropies(log_p, owner, 1), [[2.0, 2.0]])
@@ -337,8 +356,7 @@ def test_random_inputs_with_minus_infinity_never_give_nan(seed):
     for target in range(n_targets):   # keep one possible particle per target and feature
         log_p[np.flatnonzero(owner == target)[0]] = -1.0
     positions = rng.uniform(0, 100, size=(21, 2))
-    state = AdaptiveState(AdaptiveConfig(mix_norm="per_term"), n_targets=n_targets)
-    log_weights, lam = state.step(positions, log_p, owner, rng)
+    log_weights, lam = weigh(AdaptiveConfig(mix_norm="per_term"), positions, log_p, owner, rng)
     assert not np.isnan(log_weights).any() and np.isfinite(lam).all()
     np.testing.assert_allclose(lam.sum(axis=1), 1.0)
     np.testing.assert_allclose(_per_target_sums(log_weights, owner, n_targets), 1.0, rtol=1e-9)
@@ -366,17 +384,10 @@ Q_PREV = np.array([[0.5, 0.5]])
 P_CUR = np.array([[0.64, 0.36]])   # β = √(1·0.64) + √(0·0.36) = 0.8
 
 
-def test_template_update_variant_a_hand_value():
+def test_template_update_hand_value():
     # p_c = 0.8·(½, ½) + 0.2·(0.64, 0.36) = (0.528, 0.472); q = 0.8·(1, 0) + 0.2·p_c = (0.9056, 0.0944).
     updated = update_templates(Q_INIT, Q_PREV, P_CUR, np.array([False]))
     np.testing.assert_allclose(updated, [[0.9056, 0.0944]], rtol=1e-12)
-
-
-def test_template_update_variant_b_hand_value():
-    # β ↔ 1 − β: p_c = 0.2·(½, ½) + 0.8·(0.64, 0.36) = (0.612, 0.388);
-    # q = 0.2·(1, 0) + 0.8·p_c = (0.6896, 0.3104).
-    updated = update_templates(Q_INIT, Q_PREV, P_CUR, np.array([False]), variant="B")
-    np.testing.assert_allclose(updated, [[0.6896, 0.3104]], rtol=1e-12)
 
 
 def test_template_update_normalises_a_masked_current_histogram():
@@ -401,55 +412,43 @@ def test_template_update_is_frozen_under_occlusion_and_for_an_empty_current_hist
 def test_template_update_with_identical_histograms_changes_nothing():
     # q_init = q_prev = p_cur = q: β = Σ q = 1, p_c = q, q_new = q.
     q = np.array([[0.1, 0.2, 0.3, 0.4]])
-    for variant in ("A", "B"):
-        np.testing.assert_allclose(update_templates(q, q, q, np.array([False]), variant=variant), q, rtol=1e-12)
+    np.testing.assert_allclose(update_templates(q, q, q, np.array([False])), q, rtol=1e-12)
 
 
-# -- state ----------------------------------------------------------------------------------------
+# -- the weighting strategy ------------------------------------------------------------------------
 
 
-def test_state_tracks_rho_per_target_in_order():
-    state = AdaptiveState(AdaptiveConfig(rho0=0.7))
-    assert state.n_targets == 0
-    state.add_target()
-    state.add_target()
-    state.add_target()
-    np.testing.assert_array_equal(state.rho_prev, [0.7, 0.7, 0.7])
-    state.set_similarity([0.1, 0.2, 0.3])
-    state.remove_target(1)
-    np.testing.assert_array_equal(state.rho_prev, [0.1, 0.3])
-    state.add_target()
-    np.testing.assert_array_equal(state.rho_prev, [0.1, 0.3, 0.7])
-    copy = state.rho_prev
-    copy[0] = 0.99
-    assert state.rho_prev[0] == 0.1   # the property returns a copy
-
-
-def test_state_step_mixes_with_the_stored_rho():
+def test_the_strategy_mixes_with_the_previous_similarity_of_the_evidence():
     positions = SQUARE[:2]
-    state = AdaptiveState(AdaptiveConfig(keep=1.0), n_targets=1)
-    state.set_similarity([1.0])
-    log_weights, lam = state.step(positions, LOG_TWO, OWNER_TWO, np.random.default_rng(0))
+    log_weights, lam = weigh(AdaptiveConfig(keep=1.0), positions, LOG_TWO, OWNER_TWO, np.random.default_rng(0),
+                             similarity=[1.0])
     np.testing.assert_allclose(np.exp(log_weights), [5 / 7, 2 / 7], rtol=1e-12)   # the product rule
-    state.set_similarity([0.0])
-    log_weights, lam = state.step(positions, LOG_TWO, OWNER_TWO, np.random.default_rng(0))
+    log_weights, lam = weigh(AdaptiveConfig(keep=1.0), positions, LOG_TWO, OWNER_TWO, np.random.default_rng(0),
+                             similarity=[0.0])
     expected = (lam[0] * P_TWO).sum(axis=1)                                       # the λ-sum rule
     np.testing.assert_allclose(np.exp(log_weights), expected / expected.sum(), rtol=1e-12)
 
 
-def test_state_step_uses_the_configured_mix():
-    state = AdaptiveState(AdaptiveConfig(mix_norm="raw"), n_targets=1)
-    state.set_similarity([1.0])
-    log_weights, _ = state.step(SQUARE[:2], LOG_TWO, OWNER_TWO, np.random.default_rng(0))
+def test_a_new_target_starts_at_rho0():
+    # Without a previous similarity (a target's first fused frame) C (14) mixes with ρ_0.
+    config = AdaptiveConfig(keep=1.0, rho0=0.3)
+    fresh, _ = weigh(config, SQUARE[:2], LOG_TWO, OWNER_TWO, np.random.default_rng(0))
+    given, _ = weigh(config, SQUARE[:2], LOG_TWO, OWNER_TWO, np.random.default_rng(0), similarity=[0.3])
+    np.testing.assert_array_equal(fresh, given)
+
+
+def test_the_strategy_uses_the_configured_mix():
+    log_weights, _ = weigh(AdaptiveConfig(mix_norm="raw"), SQUARE[:2], LOG_TWO, OWNER_TWO,
+                           np.random.default_rng(0), similarity=[1.0])
     np.testing.assert_allclose(np.exp(log_weights), [0.1, 0.04], rtol=1e-12)     # raw product, unnormalised
 
 
-def test_state_step_is_reproducible_from_the_seed():
+def test_the_strategy_is_reproducible_from_the_seed():
     rng = np.random.default_rng(21)
     owner = rng.permutation(np.repeat([0, 1], 25))
     positions = rng.normal(size=(50, 2)) * 8
     log_p = rng.normal(-20.0, 5.0, size=(50, 2))
-    results = [AdaptiveState(n_targets=2).step(positions, log_p, owner, np.random.default_rng(5)) for _ in range(2)]
+    results = [weigh(AdaptiveConfig(), positions, log_p, owner, np.random.default_rng(5)) for _ in range(2)]
     np.testing.assert_array_equal(results[0][0], results[1][0])
     np.testing.assert_array_equal(results[0][1], results[1][1])
 
@@ -468,7 +467,6 @@ def test_state_step_is_reproducible_from_the_seed():
         ({"rho0": 2.0}, "rho0"),
         ({"rho0": "high"}, "rho0"),
         ({"mix_norm": "log"}, "mix_norm"),
-        ({"update": "C"}, "update"),
         ({"epsilon": 0.0}, "epsilon"),
         ({"epsilon": True}, "epsilon"),
     ],
@@ -480,9 +478,9 @@ def test_config_validation_names_the_field(kwargs, field):
 
 def test_config_defaults_and_accepted_edges():
     config = AdaptiveConfig()
-    assert (config.keep, config.threshold, config.rho0, config.mix_norm, config.update, config.epsilon) == (
-        0.6, 0.6, 0.8, "per_term", "A", 1e-6)
-    AdaptiveConfig(keep=1.0, threshold=0.0, rho0=1.0, mix_norm="raw", update="B")
+    assert (config.keep, config.threshold, config.rho0, config.mix_norm, config.epsilon) == (
+        0.6, 0.6, 0.8, "per_term", 1e-6)
+    AdaptiveConfig(keep=1.0, threshold=0.0, rho0=1.0, mix_norm="raw")
     with pytest.raises(Exception):
         config.keep = 0.5   # frozen
 
@@ -529,12 +527,3 @@ def test_argument_errors_name_the_argument():
         update_templates(Q_INIT, Q_PREV, [[-0.1, 1.1]], np.array([False]))
     with pytest.raises(TrackingError, match="occluded"):
         update_templates(Q_INIT, Q_PREV, P_CUR, np.array([0]))
-    with pytest.raises(TrackingError, match="variant"):
-        update_templates(Q_INIT, Q_PREV, P_CUR, np.array([False]), variant="C")
-    state = AdaptiveState(n_targets=2)
-    with pytest.raises(TrackingError, match="index"):
-        state.remove_target(2)
-    with pytest.raises(TrackingError, match="rho_t"):
-        state.set_similarity([0.5])
-    with pytest.raises(TrackingError, match="config"):
-        AdaptiveState(config={"keep": 0.5})

@@ -13,9 +13,11 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from belief.errors import BeliefError
-from plugins.video_tracking import evaluation
+from plugins.video_tracking import evaluation, motfiles
+from plugins.video_tracking.cli import register_eval
 from plugins.video_tracking.errors import TrackFileError, TrackingError
-from plugins.video_tracking.evaluation import Scores, evaluate, iou_distance, read_mot, register_eval
+from plugins.video_tracking.evaluation import Scores, evaluate, iou_distance
+from plugins.video_tracking.motfiles import read_mot
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 PETS_GT = REPO_ROOT.parent / "shared" / "data" / "pets09_s2l1_f0001_0200" / "gt.txt"
@@ -300,7 +302,7 @@ def test_read_mot_accepts_6_to_10_columns_and_blank_lines(mot_file):
     np.testing.assert_array_equal(rows, [[1, 1, 10, 20, 30, 40, 1], [1, 2, 11.5, 21, 31, 41, 0],
                                          [2, 1, 12, 22, 32, 42, 1], [2, 2, 13, 23, 33, 43, 0.8],
                                          [3, 1, 14, 24, 34, 44, 1]])
-    assert rows.dtype == np.float64 and rows.shape[1] == len(evaluation.MOT_COLUMNS)
+    assert rows.dtype == np.float64 and rows.shape[1] == len(motfiles.MOT_COLUMNS)
 
 
 @pytest.mark.parametrize("bad_line, message", [

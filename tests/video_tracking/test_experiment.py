@@ -11,28 +11,25 @@ import numpy as np
 import pytest
 
 from belief.cli import main
-from plugins.video_tracking import experiment as exp
+from plugins.video_tracking import grid
 from plugins.video_tracking.experiment import (
-    RESULT_COLUMNS,
-    RMS_COLUMNS,
-    TIMING_COLUMNS,
     Cell,
     ExperimentError,
     MethodSpec,
     SequenceSpec,
     experiment_from_mapping,
     load_experiment,
-    rms_per_frame,
-    run_cell,
-    run_experiment,
 )
+from plugins.video_tracking.grid import run_experiment
+from plugins.video_tracking.runs import _centre_errors, run_cell
+from plugins.video_tracking.tables import RESULT_COLUMNS, RMS_COLUMNS, TIMING_COLUMNS, rms_per_frame
 
 #: 2 rules x 2 seeds x 1 synthetic scene, kept short.
 SMALL = {
     "name": "small",
     "seeds": [0, 1],
-    "tracker": {"particles": 25},
-    "sequences": [{"name": "crossing", "scene": "crossing", "frames": 60}],
+    "tracker": {"particles": 12},
+    "sequences": [{"name": "crossing", "scene": "crossing", "frames": 20}],
     "grid": {"rules": ["r_rule", "dsmc"]},
 }
 
@@ -41,12 +38,12 @@ name = "small"
 seeds = [0, 1]
 
 [tracker]
-particles = 25
+particles = 12
 
 [[sequences]]
 name = "crossing"
 scene = "crossing"
-frames = 60
+frames = 20
 
 [grid]
 rules = ["r_rule", "dsmc"]
@@ -77,7 +74,7 @@ def test_the_small_grid_writes_one_row_per_run(local_run):
     assert [(r["method"], r["seed"]) for r in rows] == [("r_rule", "0"), ("r_rule", "1"), ("dsmc", "0"),
                                                         ("dsmc", "1")]
     assert {r["rule"] for r in rows} == {"r_rule", "dsmc"}
-    assert {r["frames"] for r in rows} == {"60"}
+    assert {r["frames"] for r in rows} == {"20"}
     for row in rows:
         assert -1e9 < float(row["mota"]) <= 1.0
         assert 0.0 <= float(row["idf1"]) <= 1.0
@@ -96,10 +93,12 @@ def test_identical_seeds_give_identical_tables(local_run, tmp_path):
     assert (again / "rms.csv").read_bytes() == (out / "rms.csv").read_bytes()
 
 
-def test_a_local_dask_cluster_gives_the_same_tables(local_run, tmp_path):
+def test_a_dask_cluster_gives_the_same_tables(local_run, tmp_path):
+    # A scheduler reached by its address: the runs go through the Dask client's executor.  The
+    # cluster's workers are threads of this process, which keeps the test quick.
     distributed = pytest.importorskip("distributed", reason="the dask extra is not installed")
     out, _ = local_run
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
                                   dashboard_address=None) as cluster:
         result = run_experiment(experiment_from_mapping(SMALL), tmp_path / "dask", scheduler=cluster.scheduler_address,
                                 progress=False)
@@ -108,16 +107,14 @@ def test_a_local_dask_cluster_gives_the_same_tables(local_run, tmp_path):
     assert (tmp_path / "dask" / "rms.csv").read_bytes() == (out / "rms.csv").read_bytes()
 
 
-def test_the_cli_runs_a_grid_on_a_local_dask_cluster(local_run, tmp_path, capsys):
-    pytest.importorskip("distributed", reason="the dask extra is not installed")
+def test_the_cli_runs_a_grid_and_prints_its_summary(local_run, tmp_path, capsys):
     out, _ = local_run
     config = tmp_path / "small.toml"
     config.write_text(SMALL_TOML, encoding="utf-8")
-    assert main(["experiment", str(config), "--out", str(tmp_path / "cli"), "--scheduler", "local",
-                 "--workers", "2", "--no-progress"]) == 0
+    assert main(["experiment", str(config), "--out", str(tmp_path / "cli"), "--workers", "1", "--no-progress"]) == 0
     printed = capsys.readouterr().out
     assert "1 sequences x 2 methods x 2 seeds = 4 runs" in printed
-    assert "ran 4 runs, reused 0" in printed
+    assert "ran 4 runs, reused 0" in printed and "crossing" in printed and "MOTA" in printed
     assert scores_only(tmp_path / "cli" / "results.csv") == scores_only(out / "results.csv")
 
 
@@ -125,7 +122,7 @@ def test_an_interrupted_grid_resumes_without_redoing_finished_runs(local_run, tm
     out, _ = local_run
     experiment = experiment_from_mapping(SMALL)
     calls = []
-    real = exp.run_cell
+    real = grid.run_cell
 
     def interrupted(cell):
         if len(calls) == 2:
@@ -133,13 +130,13 @@ def test_an_interrupted_grid_resumes_without_redoing_finished_runs(local_run, tm
         calls.append(cell.label)
         return real(cell)
 
-    monkeypatch.setattr(exp, "run_cell", interrupted)
+    monkeypatch.setattr(grid, "run_cell", interrupted)
     with pytest.raises(KeyboardInterrupt):
         run_experiment(experiment, tmp_path, workers=1, progress=False)
     assert len(list((tmp_path / "cells").glob("*.json"))) == 2
     assert not list((tmp_path / "cells").glob(".*partial"))
 
-    monkeypatch.setattr(exp, "run_cell", lambda cell: calls.append(cell.label) or real(cell))
+    monkeypatch.setattr(grid, "run_cell", lambda cell: calls.append(cell.label) or real(cell))
     result = run_experiment(experiment, tmp_path, workers=1, progress=False)
     assert result.computed == 2 and result.reused == 2
     assert len(calls) == 4 and len(set(calls)) == 4       # every run ran exactly once in all
@@ -171,20 +168,20 @@ def test_a_changed_setting_is_a_new_run(tmp_path):
 
 
 def test_failed_runs_are_named_and_the_others_kept(tmp_path, monkeypatch):
-    real = exp.run_cell
+    real = grid.run_cell
 
     def fails_for_dsmc(cell):
         if cell.method.name == "dsmc" and cell.seed == 1:
             raise ValueError("synthetic failure")
         return real(cell)
 
-    monkeypatch.setattr(exp, "run_cell", fails_for_dsmc)
+    monkeypatch.setattr(grid, "run_cell", fails_for_dsmc)
     with pytest.raises(ExperimentError, match=r"1 of 4 runs failed \(first: crossing/dsmc/seed 1: "
                                               r"ValueError: synthetic failure\)"):
         run_experiment(experiment_from_mapping(SMALL), tmp_path, workers=1, progress=False)
     assert len(list((tmp_path / "cells").glob("*.json"))) == 3
     assert len(read_rows(tmp_path / "results.csv")) == 3
-    monkeypatch.setattr(exp, "run_cell", real)
+    monkeypatch.setattr(grid, "run_cell", real)
     assert run_experiment(experiment_from_mapping(SMALL), tmp_path, workers=1, progress=False).computed == 1
 
 
@@ -194,17 +191,17 @@ def test_rms_table_is_w36_over_the_seeds(local_run):
     rows = read_rows(out / "rms.csv")
     assert list(rows[0]) == list(RMS_COLUMNS)
     experiment = experiment_from_mapping(SMALL)
-    # recompute target 1, frame 30, method dsmc from the per-run centre errors
+    # recompute target 1, frame 20, method dsmc from the per-run centre errors
     errors = []
     for cell in experiment.cells():
         if cell.method.name == "dsmc":
             pairs = dict((int(f), e) for f, e in result.cells[cell.key]["errors"]["1"])
-            errors.append(pairs[30])
-    row = next(r for r in rows if r["method"] == "dsmc" and r["target"] == "1" and r["frame"] == "30")
+            errors.append(pairs[20])
+    row = next(r for r in rows if r["method"] == "dsmc" and r["target"] == "1" and r["frame"] == "20")
     assert int(row["runs"]) == 2
     assert float(row["rms_error"]) == pytest.approx(math.sqrt((errors[0] ** 2 + errors[1] ** 2) / 2), rel=1e-12)
-    # one row per method, target and frame of the ground truth (2 targets x 60 frames)
-    assert len(rows) == 2 * 2 * 60
+    # one row per method, target and frame of the ground truth (2 targets x 20 frames)
+    assert len(rows) == 2 * 2 * 20
 
 
 def test_summary_is_the_mean_over_the_seeds(local_run):
@@ -226,14 +223,14 @@ def test_centre_errors_by_id_are_hand_checkable():
     tracks = np.array([[1, 1, 3, 4, 10, 20, 1, -1, -1, -1],   # centre off by (3, 4): 5 px
                        [2, 1, 2, 0, 10, 20, 1, -1, -1, -1],
                        [2, 2, 50, 50, 10, 20, 1, -1, -1, -1]])
-    assert exp._centre_errors(gt, tracks, by_id=True) == {1: [[1, 5.0], [2, 0.0]]}
+    assert _centre_errors(gt, tracks, by_id=True) == {1: [[1, 5.0], [2, 0.0]]}
     # automatic ids: pairs by IoU >= 0.5.  The (3, 4) shift leaves IoU = 7·16 / (2·200 − 112) = 0.39:
     # no pair in frame 1; a (0, 3) shift leaves 10·17 / (400 − 170) = 0.74: paired, 3 px.
     renamed = tracks.copy()
     renamed[:, 1] += 10
-    assert exp._centre_errors(gt, renamed, by_id=False) == {1: [[2, 0.0]]}
+    assert _centre_errors(gt, renamed, by_id=False) == {1: [[2, 0.0]]}
     renamed[0, 2:4] = [0, 3]
-    assert exp._centre_errors(gt, renamed, by_id=False) == {1: [[1, 3.0], [2, 0.0]]}
+    assert _centre_errors(gt, renamed, by_id=False) == {1: [[1, 3.0], [2, 0.0]]}
 
 
 def test_grid_crosses_rules_only_with_the_belief_fusion():
@@ -260,12 +257,26 @@ def test_methods_take_any_tracker_setting_and_nested_tables():
     assert stiff.motion.sigma_pos == 2.0 and stiff.motion.sigma_vel == 0.1 and stiff.adaptive_particles
 
 
+def test_a_cell_runs_without_writing_files(tmp_path, monkeypatch):
+    # The cell consumes the tracker's frame results directly: no run() and no output folder.
+    from plugins.video_tracking import runner
+
+    monkeypatch.setattr(runner, "run", lambda *a, **k: pytest.fail("run_cell must not go through run()"))
+    monkeypatch.chdir(tmp_path)
+    cell = experiment_from_mapping({**SMALL, "seeds": [0]}).cells()[0]
+    record = run_cell(cell)
+    assert list(tmp_path.iterdir()) == []
+    assert record["row"]["frames"] == 20 and len(record["tracks"]) == 40
+    assert {len(curve) for curve in record["curves"]} == {6}
+    assert all(curve[5] is None for curve in record["curves"])          # no similarity without its follow-up
+
+
 def test_an_automatic_sequence_is_scored_by_iou_pairing():
-    spec = SequenceSpec("enter", scene="entering_leaving", frames=50, init="automatic")
-    cell = Cell(spec, MethodSpec("default"), 0, (("particles", 20),))
+    spec = SequenceSpec("enter", scene="entering_leaving", frames=40, init="automatic")
+    cell = Cell(spec, MethodSpec("default"), 0, (("particles", 15),))
     assert cell.config().initiation is not None and cell.config().warm_up == 50
     record = run_cell(cell)
-    assert record["row"]["frames"] == 50
+    assert record["row"]["frames"] == 40
     assert record["errors"], "the walkers that entered are paired with tracks"
     assert record["row"]["mota"] > 0
 
@@ -276,7 +287,7 @@ def test_an_automatic_sequence_is_scored_by_iou_pairing():
     ({"sequences": ["crossing"], "grid": {"rules": ["pcr7"]}}, "unknown rule 'pcr7'"),
     ({"sequences": ["crossing"], "grid": {"cues": [["colour", "sound"]]}}, "unknown cue 'sound'"),
     ({"sequences": ["crossing"], "tracker": {"particels": 3}}, "unknown key 'particels'"),
-    ({"sequences": ["crossing"], "tracker": {"particles": 0}}, "particles must be a positive integer"),
+    ({"sequences": ["crossing"], "tracker": {"particles": 0}}, "particles must be an integer >= 1"),
     ({"sequences": ["crossing"], "tracker": {"motion": {"sigma": 1}}}, "motion: unknown key 'sigma'"),
     ({"sequences": ["crossing"], "seeds": [0, 0]}, "the seeds repeat a value"),
     ({"sequences": ["crossing"], "seeds": [-1]}, "a seed must be an integer >= 0"),
@@ -303,7 +314,7 @@ def test_a_recorded_video_is_resolved_against_the_data_folder(tmp_path):
     scenes.write_video(data / "crossing.avi", scene.frames[:20])
     scenes.write_gt(data / "gt.txt", scene.ground_truth[scene.ground_truth[:, 0] <= 20])
     config = tmp_path / "grid.toml"
-    config.write_text('seeds = [0]\ntracker = { particles = 15 }\n'
+    config.write_text('seeds = [0]\ntracker = { particles = 10 }\n'
                       '[[sequences]]\nname = "recorded"\nvideo = "crossing.avi"\ngt = "gt.txt"\n', encoding="utf-8")
     with pytest.raises(ExperimentError, match="grid.toml: sequence 'recorded': video file not found"):
         load_experiment(config)
@@ -337,11 +348,8 @@ def test_dry_run_lists_the_runs(tmp_path, capsys):
 
 
 def test_rms_per_frame_counts_only_runs_with_an_estimate():
-    spec, method = SequenceSpec("s", scene="crossing"), MethodSpec("m")
-    cells = [Cell(spec, method, 0), Cell(spec, method, 1)]
-    records = {cells[0].key: {"errors": {"1": [[1, 3.0], [2, 6.0]]}},
-               cells[1].key: {"errors": {"1": [[1, 4.0]]}}}
-    rows = rms_per_frame(cells, records)
+    runs = [("s", "m", {"errors": {"1": [[1, 3.0], [2, 6.0]]}}), ("s", "m", {"errors": {"1": [[1, 4.0]]}})]
+    rows = rms_per_frame(runs)
     assert [(r["frame"], r["runs"]) for r in rows] == [(1, 2), (2, 1)]
     assert rows[0]["rms_error"] == pytest.approx(math.sqrt(12.5))
     assert rows[1]["rms_error"] == 6.0

@@ -5,7 +5,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from belief import InvalidMassError, UnknownRuleError
+from belief import InvalidMassError
+from plugins.video_tracking.errors import TrackingError
 from plugins.video_tracking.fusion import CueFusion, FusionConfig, cue_masses
 
 
@@ -96,10 +97,12 @@ def test_a_single_cue_is_its_own_evidence():
 
 
 def test_configuration_errors_are_specific():
-    with pytest.raises(UnknownRuleError, match="known rules"):
+    with pytest.raises(TrackingError, match="known rules"):
         FusionConfig(rule="nope")
-    with pytest.raises(InvalidMassError, match="weight"):
+    with pytest.raises(TrackingError, match="FusionConfig.weight"):
         FusionConfig(weight="mean")
+    with pytest.raises(TrackingError, match="FusionConfig.r_mode must be one of paper, euclid, jousselme"):
+        FusionConfig(r_mode="manhattan")
     with pytest.raises(InvalidMassError):
         CueFusion(0)
     fusion = CueFusion(2, FusionConfig(masses="normalised"))

@@ -15,7 +15,6 @@ from plugins.video_tracking.initiation import (
     Initiator,
     foreground_blobs,
     foreground_fraction,
-    iou,
 )
 from plugins.video_tracking.scenes import BackgroundStyle, Lighting, entering_leaving, render
 
@@ -144,21 +143,6 @@ def test_foreground_fraction_of_no_boxes_and_bad_inputs():
         foreground_fraction(empty_mask(), [[0, 0, 1]])
     with pytest.raises(TrackingError):
         foreground_fraction(empty_mask().astype(np.uint8), [[0, 0, 1, 1]])
-
-
-# -- IoU -----------------------------------------------------------------------------------------------
-
-def test_iou_by_hand():
-    a = [[0, 0, 2, 2], [0, 0, 4, 4]]
-    b = [[1, 0, 2, 2], [1, 1, 2, 2], [2, 0, 2, 2], [10, 10, 3, 3]]
-    # 2 / (4 + 4 - 2); 1 / 7; touching edges; disjoint.  Then each of the first three lies inside
-    # the 4 x 4 box: 4 / 16.
-    assert np.allclose(iou(a, b), [[1 / 3, 1 / 7, 0, 0], [1 / 4, 1 / 4, 1 / 4, 0]], rtol=0, atol=1e-15)
-    assert np.allclose(iou(b, a), iou(a, b).T)
-    assert iou([[3, 3, 0, 0]], [[3, 3, 0, 0]]).tolist() == [[0.0]]  # empty union
-    assert iou(np.zeros((0, 4)), b).shape == (0, 4)
-    with pytest.raises(TrackingError):
-        iou([[0, 0, -1, 1]], b)
 
 
 # -- births --------------------------------------------------------------------------------------------
@@ -399,12 +383,12 @@ def test_an_image_shape_with_channels_is_accepted_and_a_bad_config_is_not():
     (np.zeros((H, W), np.uint8), {}, "bool array of shape"),
     (np.zeros((W, H), bool), {}, "bool array of shape"),
     (np.zeros((H, W), bool), [(0, 0, 1, 1)], "dict"),
-    (np.zeros((H, W), bool), {"a": (0, 0, 1, 1)}, "integers"),
-    (np.zeros((H, W), bool), {True: (0, 0, 1, 1)}, "integers"),
-    (np.zeros((H, W), bool), {1: (0, 0, 1)}, "four numbers"),
-    (np.zeros((H, W), bool), {1: "box"}, "four numbers"),
-    (np.zeros((H, W), bool), {1: (0, float("nan"), 1, 1)}, "finite"),
-    (np.zeros((H, W), bool), {1: (0, 0, 0, 1)}, "positive width"),
+    (np.zeros((H, W), bool), {"a": (0, 0, 1, 1)}, "a track id must be an integer"),
+    (np.zeros((H, W), bool), {True: (0, 0, 1, 1)}, "a track id must be an integer"),
+    (np.zeros((H, W), bool), {1: (0, 0, 1)}, r"track boxes: boxes must have shape \(n, 4\)"),
+    (np.zeros((H, W), bool), {1: "box"}, "track boxes: boxes must be numbers"),
+    (np.zeros((H, W), bool), {1: (0, float("nan"), 1, 1)}, "not finite"),
+    (np.zeros((H, W), bool), {1: (0, 0, 0, 1)}, "both must be positive"),
 ])
 def test_bad_update_inputs_are_rejected(mask, tracks, message):
     init = Initiator(InitiationConfig(), (H, W))

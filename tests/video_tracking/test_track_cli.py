@@ -96,7 +96,7 @@ def test_track_with_boxes_file(tmp_path):
 def test_pets_first_frames(tmp_path):
     if not (DATA / "video.avi").exists():
         pytest.skip("the PETS 2009 S2L1 data set is absent")
-    from plugins.video_tracking.evaluation import read_mot
+    from plugins.video_tracking.motfiles import read_mot
     from plugins.video_tracking.scenes import write_gt
 
     gt = read_mot(DATA / "gt.txt")
@@ -104,7 +104,9 @@ def test_pets_first_frames(tmp_path):
     write_gt(short, gt[gt[:, 0] <= 20])
     out = tmp_path / "pets"
     # The tracker stops at the end of the video; births after frame 20 do not happen as the gt is cut.
-    from plugins.video_tracking.tracker import TrackerConfig, init_from_gt, run
+    from plugins.video_tracking.config import TrackerConfig
+    from plugins.video_tracking.initiation import init_from_gt
+    from plugins.video_tracking.runner import run
     from plugins.video_tracking.video import VideoReader
 
     with VideoReader(DATA / "video.avi") as reader:
@@ -154,14 +156,44 @@ def test_fusion_strategy_edges_and_adaptive_particles_from_the_command_line(tmp_
     assert parameters["fusion"] == "adaptive" and parameters["adaptive_particles"] is True
     assert parameters["cues"] == ["colour", "location", "edges"] and parameters["initiation"] is None
     header = (out / "diagnostics.csv").read_text().splitlines()[0].split(",")
+    # the adaptive count's conflict comes from the belief fusion, so its masses are recorded too
+    assert header[:7] == ["frame", "id", "mean_m_target", "mean_m_intersection", "mean_bel", "mean_m_empty", "mean_r"]
     assert header[-5:] == ["similarity", "occluded", "confidence_colour", "confidence_location", "confidence_edges"]
     counts = np.genfromtxt(out / "diagnostics.csv", delimiter=",", names=True)["particles"]
     assert counts.min() >= 10 and counts.max() <= 20
 
 
-def test_a_negative_warm_up_is_one_line_error(tmp_path, capsys):
+@pytest.mark.parametrize("flag, value, message", [("--warm-up", "-1", "must be an integer >= 0, got -1"),
+                                                   ("--particles", "0", "must be an integer >= 1, got 0"),
+                                                   ("--seed", "x", "must be an integer, got 'x'")])
+def test_a_bad_flag_value_is_a_one_line_command_line_error(tmp_path, capsys, flag, value, message):
     video = write_video(tmp_path / "v.avi")
-    assert main(["track", str(video), "--out", str(tmp_path / "o"), "--warm-up", "-1"]) == 1
+    assert main(["track", str(video), "--out", str(tmp_path / "o"), flag, value]) == 2
     err = capsys.readouterr().err.strip()
-    assert err == "belief: error: --warm-up must be a non-negative integer, got -1"
+    assert err.count("\n") == 0 and f"argument {flag}: {message}" in err
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("setting, message", [("masses=absolute", "TrackerConfig.masses must be one of"),
+                                              ("location.sigmaa=3", "unknown key 'sigmaa'"),
+                                              ("novalue", "--set takes KEY=VALUE")])
+def test_a_bad_setting_is_a_one_line_error(tmp_path, capsys, setting, message):
+    video = write_video(tmp_path / "v.avi")
+    assert main(["track", str(video), "--out", str(tmp_path / "o"), "--set", setting]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("belief: error:") and message in err and err.count("\n") == 0
+    assert not (tmp_path / "o").exists()
+
+
+def test_every_setting_is_reachable_from_the_command_line(tmp_path):
+    video = write_video(tmp_path / "v.avi", n_frames=3)
+    boxes = tmp_path / "boxes.csv"
+    boxes.write_text("1,21,11,10,20\n")
+    out = tmp_path / "out"
+    assert track([str(video), "--init", str(boxes), "--out", str(out), "--no-video", "--no-progress",
+                  "--set", "masses=normalised", "--set", "adaptive_fusion.mix_norm='raw'", "--set", "particles=12",
+                  "--set", "colour.bins=4", "--template-update", "--diagnostics", "all"]) == 0
+    parameters = json.loads((out / "summary.json").read_text())["parameters"]
+    assert parameters["masses"] == "normalised" and parameters["adaptive_fusion"]["mix_norm"] == "raw"
+    assert parameters["particles"] == 12 and parameters["colour"]["bins"] == 4
+    assert parameters["template_update"] is True and parameters["diagnostics"] == "all"

@@ -9,31 +9,25 @@ import numpy as np
 import pytest
 
 from plugins.video_tracking import scenes
+from plugins.video_tracking.config import TrackerConfig
 from plugins.video_tracking.errors import InitError, TrackingError, UnknownCueError
 from plugins.video_tracking.evaluation import evaluate
+from plugins.video_tracking.initiation import InitPlan, TargetInit, init_from_boxes, init_from_gt, read_init_boxes
 from plugins.video_tracking.particles import DegenerateWeightsWarning
-from plugins.video_tracking.tracker import (
-    InitPlan,
-    TargetInit,
-    Tracker,
-    TrackerConfig,
-    init_from_boxes,
-    init_from_gt,
-    read_init_boxes,
-    run,
-)
+from plugins.video_tracking.runner import run
+from plugins.video_tracking.tracker import Tracker
 
 
 def track(scene, config, seed, plan=None):
-    """MOT rows and all estimates of a scene tracked from its ground truth (or ``plan``)."""
+    """MOT rows, all estimates and every diagnostics row of a scene tracked from its ground truth (or ``plan``)."""
     plan = plan or init_from_gt(scene.ground_truth)
     tracker = Tracker(config, plan, np.random.default_rng(seed))
-    rows, estimates = [], []
-    for t in range(len(scene)):
-        step = tracker.step(t + 1, scene.frame(t))
-        estimates += step
-        rows += [e.mot_row() for e in step]
-    return np.array(rows), estimates
+    rows, estimates, diagnostics = [], [], []
+    for result in tracker.track(scene.frames):
+        estimates += result.estimates
+        rows += result.mot_rows()
+        diagnostics += result.diagnostics.rows(result.frame)
+    return np.array(rows), estimates, diagnostics
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +44,7 @@ def crossing_scene():
 def test_crossing_with_full_occlusion_keeps_identities(crossing_scene, seed):
     config = TrackerConfig(particles=40, cues=("colour", "location"))
     assert config.rule == "r_rule"
-    rows, _ = track(crossing_scene, config, seed=seed)
+    rows, _, _ = track(crossing_scene, config, seed=seed)
     scores = evaluate(crossing_scene.ground_truth, rows)
     assert scores.id_switches == 0
     assert scores.matched_pairs >= 0.6 * scores.num_objects
@@ -62,9 +56,8 @@ def test_crossing_with_full_occlusion_keeps_identities(crossing_scene, seed):
 
 
 def test_crossing_with_default_cues_has_no_id_switch(crossing_scene):
-    rows, estimates = track(crossing_scene, TrackerConfig(particles=40), seed=1)
+    rows, _, diagnostics = track(crossing_scene, TrackerConfig(particles=40), seed=1)
     assert evaluate(crossing_scene.ground_truth, rows).id_switches == 0
-    diagnostics = [e.diagnostics for e in estimates if e.diagnostics is not None]
     assert len(diagnostics) == 2 * (len(crossing_scene) - 1)
     for d in diagnostics:
         assert all(np.isfinite(v) for v in d.values())
@@ -80,11 +73,11 @@ def test_target_leaving_the_frame_stays_finite():
     plan = init_from_boxes([scene.boxes_at(0)[1]])                 # born at frame 1, never removed
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DegenerateWeightsWarning)
-        rows, estimates = track(scene, TrackerConfig(particles=30), seed=0, plan=plan)
+        rows, estimates, diagnostics = track(scene, TrackerConfig(particles=30), seed=0, plan=plan)
     assert len(rows) == len(scene)
     assert np.isfinite(rows).all()
     assert all(np.isfinite(e.state).all() for e in estimates)
-    assert all(np.isfinite(list(e.diagnostics.values())).all() for e in estimates if e.diagnostics)
+    assert all(np.isfinite(list(d.values())).all() for d in diagnostics)
     # The walker is gone after frame ~10; the estimate stays inside the image bounds.
     assert (rows[:, 2] + rows[:, 4] / 2 <= config.width + 1).all()
 
@@ -93,9 +86,9 @@ def test_same_seed_same_tracks_different_seed_different(crossing_scene):
     short = scenes.Scene(crossing_scene.config, crossing_scene.frames[:12],
                          crossing_scene.ground_truth[crossing_scene.ground_truth[:, 0] <= 12], crossing_scene.visibility)
     config = TrackerConfig(particles=30)
-    first, _ = track(short, config, seed=5)
-    again, _ = track(short, config, seed=5)
-    other, _ = track(short, config, seed=6)
+    first, _, _ = track(short, config, seed=5)
+    again, _, _ = track(short, config, seed=5)
+    other, _, _ = track(short, config, seed=6)
     np.testing.assert_array_equal(first, again)
     assert first.shape == other.shape and not np.array_equal(first, other)
 
@@ -106,7 +99,7 @@ def test_births_and_deaths_follow_the_ground_truth():
     plan = init_from_gt(gt)
     image = np.full((120, 160, 3), 90, np.uint8)
     tracker = Tracker(TrackerConfig(particles=10, cues=("location", "colour")), plan, np.random.default_rng(0))
-    ids = [[e.id for e in tracker.step(t, image)] for t in range(1, 6)]
+    ids = [[e.id for e in tracker.step(t, image).estimates] for t in range(1, 6)]
     assert ids == [[7], [7, 9], [7, 9], [9], []]
     assert tracker.cues[1].n_targets == 0
 
@@ -114,7 +107,7 @@ def test_births_and_deaths_follow_the_ground_truth():
 def test_newborn_output_is_its_box():
     plan = init_from_boxes([(10, 20, 8, 16)], ids=[4])
     image = np.zeros((60, 80, 3), np.uint8)
-    (born,) = Tracker(TrackerConfig(particles=5), plan, np.random.default_rng(0)).step(1, image)
+    (born,) = Tracker(TrackerConfig(particles=5), plan, np.random.default_rng(0)).step(1, image).estimates
     assert born.mot_row() == [1, 4, 11.0, 21.0, 8.0, 16.0, -1, -1, -1, -1]
 
 
@@ -123,8 +116,8 @@ def test_other_rules_run(crossing_scene, rule):
     short = crossing_scene.frames[:4]
     plan = init_from_gt(crossing_scene.ground_truth)
     tracker = Tracker(TrackerConfig(particles=20, rule=rule), plan, np.random.default_rng(0))
-    for t, image in enumerate(short):
-        for e in tracker.step(t + 1, image):
+    for result in tracker.track(short):
+        for e in result.estimates:
             assert np.isfinite(e.state).all()
 
 

@@ -7,20 +7,19 @@ import pytest
 
 from plugins.video_tracking import scenes
 from plugins.video_tracking.adaptive import AdaptiveConfig
+from plugins.video_tracking.boxes import iou
+from plugins.video_tracking.config import TrackerConfig
 from plugins.video_tracking.errors import InitError, TrackingError
 from plugins.video_tracking.evaluation import evaluate
-from plugins.video_tracking.initiation import InitiationConfig, iou
-from plugins.video_tracking.tracker import (
-    FUSIONS,
-    Tracker,
-    TrackerConfig,
-    diagnostic_columns,
-    init_from_gt,
-)
+from plugins.video_tracking.initiation import InitiationConfig, init_from_gt
+from plugins.video_tracking.tracker import Tracker, diagnostic_columns
+from plugins.video_tracking.weighting import WEIGHTINGS
+
+FUSIONS = tuple(WEIGHTINGS)
 
 
 def run_scene(scene, config, seed=0, plan=None, watch=None):
-    """All estimates of a scene, frame by frame; ``watch(tracker, frame)`` is called before each step."""
+    """The frame results of a scene; ``watch(tracker, frame)`` is called before each step."""
     tracker = Tracker(config, plan, np.random.default_rng(seed))
     per_frame = []
     for t in range(len(scene)):
@@ -28,6 +27,11 @@ def run_scene(scene, config, seed=0, plan=None, watch=None):
             watch(tracker, t + 1)
         per_frame.append(tracker.step(t + 1, scene.frame(t)))
     return tracker, per_frame
+
+
+def diagnostics_by_frame(per_frame):
+    """{(frame, id): diagnostics} of every target that was filtered."""
+    return {(result.frame, row["id"]): row for result in per_frame for row in result.diagnostics.rows(result.frame)}
 
 
 # -- automatic initiation -------------------------------------------------------------------------
@@ -47,7 +51,7 @@ def test_people_entering_are_found_within_a_few_frames_without_an_init_file(ente
         found = None
         for row in own:
             frame = int(row[0])
-            boxes = np.array([e.box for e in per_frame[frame - 1]]).reshape(-1, 4)
+            boxes = np.array([e.box for e in per_frame[frame - 1].estimates]).reshape(-1, 4)
             truth = np.array([[row[2] - 1, row[3] - 1, row[4], row[5]]])
             if len(boxes) and iou(truth, boxes).max() >= 0.5:
                 found = frame
@@ -61,13 +65,13 @@ def test_no_track_is_left_on_a_person_who_left(entering):
     for walker in np.unique(gt[:, 1]):
         last_row = gt[(gt[:, 1] == walker)][-1]
         exit_box = np.array([[last_row[2] - 1, last_row[3] - 1, last_row[4], last_row[5]]])
-        for estimates in per_frame[int(last_row[0]) + 5:]:
-            boxes = np.array([e.box for e in estimates]).reshape(-1, 4)
+        for result in per_frame[int(last_row[0]) + 5:]:
+            boxes = np.array([e.box for e in result.estimates]).reshape(-1, 4)
             assert not len(boxes) or iou(exit_box, boxes).max() == 0.0
-    assert per_frame[-1] == []                                    # everybody left before the end
-    ids = {e.id for estimates in per_frame for e in estimates}
+    assert per_frame[-1].estimates == ()                          # everybody left before the end
+    ids = {e.id for result in per_frame for e in result.estimates}
     assert len(ids) == 3                                          # one track per person, nothing spurious
-    rows = np.array([e.mot_row() for estimates in per_frame for e in estimates])
+    rows = np.array([row for result in per_frame for row in result.mot_rows()])
     assert evaluate(gt, rows).mota >= 0.8
 
 
@@ -83,7 +87,7 @@ def test_a_tracker_without_plan_needs_the_initiation():
 OCCLUSION = AdaptiveConfig(threshold=0.9)
 
 
-@pytest.mark.parametrize("fusion, update", [("adaptive", None), ("belief", True)])
+@pytest.mark.parametrize("fusion, update", [("adaptive", False), ("belief", True)])
 def test_an_occluded_target_keeps_its_template(fusion, update):
     scene = scenes.render(scenes.similar_colours(0))
     config = TrackerConfig(particles=60, cues=("colour", "location"), fusion=fusion, template_update=update,
@@ -95,8 +99,7 @@ def test_an_occluded_target_keeps_its_template(fusion, update):
         before[frame] = [cue.templates.copy() for cue in tracker.cues if hasattr(cue, "templates")]
 
     tracker, per_frame = run_scene(scene, config, plan=init_from_gt(scene.ground_truth), watch=watch)
-    flags = {(frame, e.id): e.diagnostics["occluded"] for frame, estimates in enumerate(per_frame, start=1)
-             for e in estimates if e.diagnostics is not None}
+    flags = {key: row["occluded"] for key, row in diagnostics_by_frame(per_frame).items()}
     # Walker 1 is fully hidden from frame index 47 to 53 (frames 48-54).
     assert any(flags[(frame, 1)] == 1.0 for frame in range(48, 55))
     assert not any(flags[(frame, k)] for frame in range(10, 36) for k in (1, 2))
@@ -116,6 +119,7 @@ def test_fixed_templates_by_default_for_the_belief_rules():
     scene = scenes.render(scenes.crossing(0))
     config = TrackerConfig(particles=20, cues=("colour", "location"))
     assert not config.updates_templates and TrackerConfig(fusion="adaptive").updates_templates
+    assert TrackerConfig(fusion="adaptive", template_update=False).updates_templates     # C's method includes it
     tracker, _ = run_scene(scenes.Scene(scene.config, scene.frames[:6], scene.ground_truth, scene.visibility),
                            config, plan=init_from_gt(scene.ground_truth[scene.ground_truth[:, 0] <= 6]))
     colour = tracker.cues[0]
@@ -127,8 +131,8 @@ def test_the_particle_count_rises_during_the_occlusion_and_falls_after():
     scene = scenes.render(scenes.crossing(0))
     config = TrackerConfig(particles=80, cues=("colour", "location"), adaptive_particles=True)
     _, per_frame = run_scene(scene, config, plan=init_from_gt(scene.ground_truth))
-    counts = {frame: e.diagnostics["particles"] for frame, estimates in enumerate(per_frame, start=1)
-              for e in estimates if e.id == 1 and e.diagnostics is not None}
+    counts = {frame: row["particles"] for (frame, target), row in diagnostics_by_frame(per_frame).items()
+              if target == 1}
     before = np.mean([counts[f] for f in range(10, 31)])
     during = np.mean([counts[f] for f in range(46, 56)])
     after = np.mean([counts[f] for f in range(75, 96)])
@@ -140,26 +144,52 @@ def test_a_fixed_count_keeps_n():
     scene = scenes.render(scenes.crossing(0))
     short = scenes.Scene(scene.config, scene.frames[:5], scene.ground_truth, scene.visibility)
     _, per_frame = run_scene(short, TrackerConfig(particles=30), plan=init_from_gt(scene.ground_truth))
-    assert {e.diagnostics["particles"] for estimates in per_frame[1:] for e in estimates} == {30.0}
+    assert {row["particles"] for row in diagnostics_by_frame(per_frame).values()} == {30.0}
 
 
 # -- strategies and diagnostics ----------------------------------------------------------------------
 @pytest.mark.parametrize("fusion", FUSIONS)
-def test_every_fusion_strategy_tracks_and_reports_the_same_diagnostics(fusion):
+def test_every_fusion_strategy_tracks_and_reports_the_same_diagnostics_on_request(fusion):
     scene = scenes.render(scenes.crossing(0))
     short = scenes.Scene(scene.config, scene.frames[:12], scene.ground_truth, scene.visibility)
     cues = ("colour", "location", "edges")
-    _, per_frame = run_scene(short, TrackerConfig(particles=30, cues=cues, fusion=fusion),
-                             plan=init_from_gt(scene.ground_truth))
-    for estimates in per_frame[1:]:
-        for e in estimates:
-            assert tuple(e.diagnostics) == diagnostic_columns(cues)
-            assert all(np.isfinite(v) for v in e.diagnostics.values())
-            assert abs(sum(e.diagnostics[f"confidence_{c}"] for c in cues) - 1.0) < 1e-9
-            assert e.diagnostics["occluded"] in (0.0, 1.0)
-    rows = np.array([e.mot_row() for estimates in per_frame for e in estimates])
+    config = TrackerConfig(particles=30, cues=cues, fusion=fusion, diagnostics="all")
+    _, per_frame = run_scene(short, config, plan=init_from_gt(scene.ground_truth))
+    everything = diagnostic_columns(TrackerConfig(cues=cues, diagnostics="all"))
+    for result in per_frame[1:]:
+        assert result.diagnostics.columns == everything
+        for row in result.diagnostics.rows(result.frame):
+            assert all(np.isfinite(v) for v in row.values())
+            assert abs(sum(row[f"confidence_{c}"] for c in cues) - 1.0) < 1e-9
+            assert row["occluded"] in (0.0, 1.0)
+            assert 0.0 <= row["mean_m_target"] <= row["mean_bel"] + 1e-12
+    rows = np.array([row for result in per_frame for row in result.mot_rows()])
     truth = scene.ground_truth[scene.ground_truth[:, 0] <= 12]
     assert evaluate(truth, rows).mota >= 0.8
+
+
+@pytest.mark.parametrize("fusion, columns", [
+    ("belief", ("mean_m_target", "mean_m_intersection", "mean_bel", "mean_m_empty", "mean_r", "particles", "ess")),
+    ("adaptive", ("particles", "ess", "similarity", "occluded", "confidence_colour", "confidence_location")),
+    ("sum", ("particles", "ess")),
+    ("product", ("particles", "ess")),
+])
+def test_only_the_active_strategy_runs_by_default(fusion, columns, monkeypatch):
+    # The belief fusion and C's confidences run only for the strategy that uses them.
+    from plugins.video_tracking import adaptive, weighting
+
+    calls = []
+    monkeypatch.setattr(weighting.BeliefWeighting, "fuse",
+                        lambda self, evidence, real=weighting.BeliefWeighting.fuse: calls.append("belief")
+                        or real(self, evidence))
+    monkeypatch.setattr(adaptive, "feature_spreads",
+                        lambda *a, real=adaptive.feature_spreads, **k: calls.append("spreads") or real(*a, **k))
+    scene = scenes.render(scenes.crossing(0))
+    short = scenes.Scene(scene.config, scene.frames[:4], scene.ground_truth, scene.visibility)
+    config = TrackerConfig(particles=20, cues=("colour", "location"), fusion=fusion)
+    _, per_frame = run_scene(short, config, plan=init_from_gt(scene.ground_truth))
+    assert per_frame[-1].diagnostics.columns == columns
+    assert set(calls) == {"belief": {"belief"}, "adaptive": {"spreads"}}.get(fusion, set())
 
 
 def test_strategies_weigh_particles_differently():
@@ -169,7 +199,7 @@ def test_strategies_weigh_particles_differently():
     for fusion in FUSIONS:
         _, per_frame = run_scene(short, TrackerConfig(particles=30, cues=("colour", "location"), fusion=fusion),
                                  plan=init_from_gt(scene.ground_truth))
-        states[fusion] = np.array([e.state for e in per_frame[-1]])
+        states[fusion] = np.array([e.state for e in per_frame[-1].estimates])
     values = list(states.values())
     assert all(not np.array_equal(values[0], other) for other in values[1:])
 
@@ -177,11 +207,13 @@ def test_strategies_weigh_particles_differently():
 @pytest.mark.parametrize("kwargs, message", [
     ({"fusion": "vote"}, "unknown fusion 'vote'; known fusions: belief, adaptive, sum, product"),
     ({"kappa": "entropy"}, "TrackerConfig.kappa must be one of mass, r"),
-    ({"warm_up": -1}, "TrackerConfig.warm_up must be a non-negative integer"),
-    ({"template_update": "yes"}, "TrackerConfig.template_update must be None, True or False"),
+    ({"warm_up": -1}, "TrackerConfig.warm_up must be an integer >= 0"),
+    ({"template_update": "yes"}, "TrackerConfig.template_update must be True or False"),
     ({"adaptive_particles": 1}, "TrackerConfig.adaptive_particles must be True or False"),
-    ({"initiation": {"border": 5}}, "TrackerConfig.initiation must be None or an InitiationConfig"),
-    ({"adaptive_fusion": {"threshold": 0.5}}, "TrackerConfig.adaptive_fusion must be a AdaptiveConfig"),
+    ({"initiation": {"border": 5}}, "TrackerConfig.initiation must be an InitiationConfig"),
+    ({"adaptive_fusion": {"threshold": 0.5}}, "TrackerConfig.adaptive_fusion must be an AdaptiveConfig"),
+    ({"diagnostics": "some"}, "TrackerConfig.diagnostics must be one of strategy, all"),
+    ({"masses": "absolute"}, "TrackerConfig.masses must be one of relative, normalised"),
 ])
 def test_bad_settings_name_the_field(kwargs, message):
     with pytest.raises(TrackingError, match=message.replace("(", r"\(").replace(")", r"\)")):
@@ -192,7 +224,7 @@ def test_warm_up_learns_the_background_before_the_first_frame():
     scene = scenes.render(scenes.crossing(0))
     tracker = Tracker(TrackerConfig(particles=10, initiation=InitiationConfig()), None, np.random.default_rng(0))
     assert tracker.warm_up(scene.frames[::2]) == 50
-    estimates = tracker.step(1, scene.frame(0))
+    estimates = tracker.step(1, scene.frame(0)).estimates
     # The background is known, so both walkers are foreground blobs of the first frame.
     assert len(estimates) == 2
     assert Tracker(TrackerConfig(cues=("colour",)), init_from_gt(scene.ground_truth),

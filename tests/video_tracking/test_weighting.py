@@ -12,7 +12,9 @@ from plugins.video_tracking.cues import LocationConfig, LocationCue, Observation
 from plugins.video_tracking.errors import TrackingError
 from plugins.video_tracking.fusion import CueFusion, FusionConfig, cue_masses, relative_likelihoods
 from plugins.video_tracking.perspective import MAX_SCALE_CHANGE, PerspectiveScale
-from plugins.video_tracking.tracker import Tracker, TrackerConfig, init_from_boxes
+from plugins.video_tracking.config import TrackerConfig
+from plugins.video_tracking.initiation import init_from_boxes
+from plugins.video_tracking.tracker import Tracker
 
 log_likelihood_rows = st.lists(st.lists(st.floats(-50.0, 0.0), min_size=3, max_size=3), min_size=1, max_size=8)
 
@@ -32,10 +34,10 @@ def test_absolute_masses_sum_to_one_and_keep_likelihoods_that_fit(rows):
 def test_absolute_masses_reject_likelihoods_above_one_and_unknown_modes():
     with pytest.raises(InvalidMassError, match=r"\[0, 1\]"):
         cue_masses(np.array([[0.5, -1.0]]), "absolute")
-    with pytest.raises(InvalidMassError, match="relative, absolute, normalised"):
+    with pytest.raises(InvalidMassError, match="normalised, absolute"):
         cue_masses(np.array([[0.0, -1.0]]), "odd")
-    with pytest.raises(InvalidMassError, match="masses must be one of"):
-        FusionConfig(masses="odd")
+    with pytest.raises(TrackingError, match="FusionConfig.masses must be one of relative, normalised"):
+        FusionConfig(masses="absolute")
 
 
 @settings(max_examples=100, deadline=None)
@@ -121,15 +123,17 @@ def test_tracker_sizes_windows_by_perspective_once_two_rows_are_known():
     plan = init_from_boxes([(40, 20, 10, 30), (200, 120, 20, 60)])
     tracker = Tracker(TrackerConfig(particles=10, cues=("location",)), plan, np.random.default_rng(0))
     tracker.step(1, image)
-    assert tracker.perspective is not None
-    estimates = tracker.step(2, image)
+    perspective = tracker.tracks.perspective
+    assert perspective is not None
+    estimates = tracker.step(2, image).estimates
     for estimate, target in zip(estimates, tracker.targets):
-        expected = tracker.perspective.log_scale(np.array([estimate.state[1]]), target.birth_cy)[0]
+        expected = perspective.log_scale(np.array([estimate.state[1]]), target.birth_cy)[0]
         assert estimate.state[4] == pytest.approx(expected, abs=0.05)
-    fixed = Tracker(TrackerConfig(particles=10, cues=("location",), scale="state"), plan, np.random.default_rng(0))
-    fixed.step(1, image)
-    assert fixed.perspective is None
-    with pytest.raises(TrackingError, match="scale must be one of"):
-        TrackerConfig(scale="zoom")
+    # One birth box: no ground plane yet, so every window keeps its birth size.
+    single = Tracker(TrackerConfig(particles=10, cues=("location",)), init_from_boxes([(40, 20, 10, 30)]),
+                     np.random.default_rng(0))
+    single.step(1, image)
+    assert single.tracks.perspective is None
+    assert all(e.state[4] == 0.0 and e.box[2:] == (10.0, 30.0) for e in single.step(2, image).estimates)
     with pytest.raises(TrackingError, match="masses must be one of"):
         TrackerConfig(masses="odd")
