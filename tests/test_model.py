@@ -14,7 +14,6 @@ from tests.strategies import (
     minimal_regions,
     model_cases,
     regions_of,
-    shafer_allowed,
     tracking_allowed,
 )
 
@@ -272,15 +271,6 @@ def test_from_dict_errors_are_format_errors_naming_the_problem(data, fragment):
     with pytest.raises(FormatError) as info:
         Model.from_dict(ABC, data)
     assert fragment in str(info.value)
-
-
-def test_shafer_regions_helper_agrees_with_the_model():
-    # guards the reference helper used across the suite
-    for n in range(1, 6):
-        frame = Frame.numbered(n)
-        model = Model.shafer(frame)
-        regions = [r for r in range(1, 1 << n) if not model.is_empty(Element(frame, [r]))]
-        assert frozenset(regions) == shafer_allowed(n)
 
 
 @pytest.mark.parametrize("data", [
