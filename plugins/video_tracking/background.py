@@ -114,6 +114,7 @@ class BackgroundModel:
         self._subtractor.setNMixtures(int(config.mixtures))
         self._subtractor.setBackgroundRatio(float(config.background_ratio))
         self._shape: tuple[int, ...] | None = None
+        self._labels: np.ndarray | None = None             # MOG2's per-frame output, reused
         self.frames_seen = 0
 
     def __repr__(self) -> str:
@@ -139,11 +140,13 @@ class BackgroundModel:
                                 f"dtype {image.dtype}")
         if self._shape is None:
             self._shape = image.shape
+            self._labels = np.empty(image.shape[:2], np.uint8)
         elif image.shape != self._shape:
             # MOG2 would reinitialise itself silently on a new size, losing all it has learnt.
             raise TrackingError(f"frame shape {image.shape} differs from the model's {self._shape}")
         rate = -1.0 if self.config.learning_rate is None else float(self.config.learning_rate)
-        labels = self._subtractor.apply(np.ascontiguousarray(image), learningRate=rate)
+        # MOG2 writes its labels into the buffer it is given: no new image per frame.
+        labels = self._subtractor.apply(np.ascontiguousarray(image), self._labels, learningRate=rate)
         self.frames_seen += 1
         return labels == _MOG2_FOREGROUND
 

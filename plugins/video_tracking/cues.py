@@ -399,8 +399,14 @@ def _log_gaussian(squared_distance: np.ndarray, sigma: float) -> np.ndarray:
 
 def _squared_distances(points: np.ndarray, centres: np.ndarray) -> np.ndarray:
     """‖points_p − centres_j‖², shape (len(points), len(centres))."""
-    offsets = points[:, None, :] - centres[None, :, :]
-    return np.einsum("pjk,pjk->pj", offsets, offsets)
+    # Per axis, (P, τ) arrays with long inner loops: several times faster than an einsum over
+    # a (P, τ, 2) array, and the same sum dx² + dy².
+    squared = points[:, 0:1] - centres[:, 0]
+    squared *= squared
+    dy = points[:, 1:2] - centres[:, 1]
+    dy *= dy
+    squared += dy
+    return squared
 
 
 # -- colour histograms (vectorised over particles) ------------------------------------------------
@@ -430,18 +436,31 @@ def colour_bins(image: np.ndarray, bins: int) -> np.ndarray:
 
     Returns
     -------
-    ndarray of intp, shape (H, W)
-        Values in 0 … bins³ − 1.
+    ndarray of uint16, shape (H, W)
+        Values in 0 … bins³ − 1; intp for more than 40 bins per channel, whose bins³ does
+        not fit in 16 bits.
 
     Examples
     --------
     >>> pixel = np.array([[[0, 0, 255], [255, 255, 255]]], np.uint8)     # red, white (BGR)
-    >>> colour_bins(pixel, 8)
-    array([[448, 511]])
+    >>> colour_bins(pixel, 8).tolist()
+    [[448, 511]]
     """
-    channels = image.astype(np.intp) * bins >> 8                      # ⌊v·bins/256⌋, exact in integers
-    blue, green, red = channels[..., 0], channels[..., 1], channels[..., 2]
-    return (red * bins + green) * bins + blue
+    if bins > 40:
+        channels = image.astype(np.intp) * bins >> 8                  # ⌊v·bins/256⌋, exact in integers
+        blue, green, red = channels[..., 0], channels[..., 1], channels[..., 2]
+        return (red * bins + green) * bins + blue
+    # 16 bits hold v·bins and bins³ exactly.  The bin image is read at every sample point of
+    # every particle, and a quarter of intp's size keeps it in cache and out of the
+    # allocator's mapped blocks.
+    channels = image.astype(np.uint16)
+    channels *= bins
+    channels >>= 8                                                    # ⌊v·bins/256⌋
+    joint = channels[..., 2] * np.uint16(bins)
+    joint += channels[..., 1]
+    joint *= bins
+    joint += channels[..., 0]
+    return joint
 
 
 def orientation_bins(image: np.ndarray, bins: int = 16, unsigned: bool = False,
@@ -628,38 +647,118 @@ def kernel_histograms(bin_image: np.ndarray, centres: np.ndarray, box_sizes: np.
     ...                   pixel_weights=np.where(bins == 1, 3.0, 1.0))
     array([[0.25, 0.75]])
     """
+    counts, norms = _kernel_counts(bin_image, centres, box_sizes, n_bins, samples, foreground, pixel_weights)
+    return counts.reshape(-1, n_bins) / norms
+
+
+@lru_cache(maxsize=32)
+def _grid_axes(samples: tuple[int, int]) -> tuple[np.ndarray, ...]:
+    """The grid of :func:`kernel_grid` by axis: u (across,), v (down,), then each kept point's u and v index.
+
+    The kept points are in the order of :func:`kernel_grid`; all four arrays are read-only.
+    """
+    across, down = samples
+    u = (2.0 * np.arange(across) + 1.0) / across - 1.0
+    v = (2.0 * np.arange(down) + 1.0) / down - 1.0
+    grid_u, grid_v = np.meshgrid(u, v)
+    keep = np.flatnonzero(1.0 - grid_u ** 2 - grid_v ** 2 > 0)
+    down_index, across_index = np.divmod(keep, across)
+    for array in (u, v, across_index, down_index):
+        array.flags.writeable = False
+    return u, v, across_index, down_index
+
+
+def _tiled_weights(samples: tuple[int, int], n_boxes: int) -> np.ndarray:
+    """The kernel weights of :func:`kernel_grid` repeated for ``n_boxes`` boxes, flat (n_boxes · S,), read-only."""
+    if n_boxes > HISTOGRAM_BLOCK:                        # not worth keeping
+        return np.tile(kernel_grid(samples)[1], n_boxes)
+    return _kept_tiled_weights(samples, n_boxes)
+
+
+@lru_cache(maxsize=8)
+def _kept_tiled_weights(samples: tuple[int, int], n_boxes: int) -> np.ndarray:
+    """:func:`_tiled_weights` for a block of boxes, built once per block size."""
+    tiled = np.tile(kernel_grid(samples)[1], n_boxes)
+    tiled.flags.writeable = False
+    return tiled
+
+
+def _sample_pixels(centres: np.ndarray, box_sizes: np.ndarray, samples: tuple[int, int], shape: tuple[int, int],
+                   inside: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
+    """The flat pixel index of every sample point of every box, shape (n, S), and which lie in the image.
+
+    A box's sample points form a grid, so the coordinates are computed per axis (across +
+    down values per box rather than 2 S), each by the same floating-point expression as
+    point by point, and only the pixel indices are spread over the grid.  The work runs
+    sample-major, (S, n), where every row is as long as the block, and is turned box-major
+    at the end for the histogram counts.  The second array (None unless ``inside`` is asked,
+    and None when every point lies in the image) flags the points inside the image.
+    """
+    u, v, across_index, down_index = _grid_axes(samples)
+    height, width = shape
+    half = 0.5 * box_sizes
+    xs = centres[:, 0] + u[:, None] * half[:, 0]                                   # (across, n)
+    ys = centres[:, 1] + v[:, None] * half[:, 1]                                   # (down, n)
+    # Truncating a coordinate clipped to [0, W − 1] gives the same pixel as clipping ⌊x⌋,
+    # without a floor pass.
+    columns = np.clip(xs, 0, width - 1).astype(np.intp)
+    rows = np.clip(ys, 0, height - 1).astype(np.intp)
+    rows *= width
+    pixels = np.take(rows, down_index, axis=0)                                     # (S, n)
+    pixels += np.take(columns, across_index, axis=0)
+    pixels = pixels.T.copy()                                                       # (n, S)
+    if not inside:
+        return pixels, None
+    within_x = (xs >= 0) & (xs < width)
+    within_y = (ys >= 0) & (ys < height)
+    if within_x.all() and within_y.all():
+        return pixels, None
+    within = np.take(within_y, down_index, axis=0) & np.take(within_x, across_index, axis=0)
+    return pixels, within.T
+
+
+def _kernel_counts(bin_image: np.ndarray, centres: np.ndarray, box_sizes: np.ndarray, n_bins: int,
+                   samples: tuple[int, int], foreground: np.ndarray | None = None,
+                   pixel_weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | float]:
+    """The unnormalised histograms of :func:`kernel_histograms`, flat (n · B,), and their 1 / f.
+
+    1 / f is a number without pixel weights, and one per box, shape (n, 1), with them (1 for
+    a box without weight, whose counts are all 0).  Each count adds its sample weights in
+    the order of :func:`kernel_grid`, so the counts are those of a point-by-point sum.
+    """
     if pixel_weights is not None and np.shape(pixel_weights) != np.shape(bin_image):
         raise TrackingError(f"pixel_weights must have the shape {np.shape(bin_image)} of the bin image, "
                             f"got {np.shape(pixel_weights)}")
-    offsets, weights = kernel_grid(tuple(samples))
+    samples = tuple(samples)
+    _, weights = kernel_grid(samples)
     n_boxes = centres.shape[0]
-    height, width = bin_image.shape
-    half = 0.5 * box_sizes
-    xs = centres[:, 0:1] + offsets[None, :, 0] * half[:, 0:1]                      # (P, S)
-    ys = centres[:, 1:2] + offsets[None, :, 1] * half[:, 1:2]
-    # Truncating a coordinate clipped to [0, W − 1] gives the same pixel as clipping ⌊x⌋,
-    # without a floor pass over all P·S samples.
-    pixels = np.clip(ys, 0, height - 1).astype(np.intp) * width + np.clip(xs, 0, width - 1).astype(np.intp)
-    slots = bin_image.ravel()[pixels] + (np.arange(n_boxes, dtype=np.intp) * n_bins)[:, None]
-    sample_weights = np.broadcast_to(weights, pixels.shape)
+    pixels, inside = _sample_pixels(centres, box_sizes, samples, np.shape(bin_image), foreground is not None)
+    slots = np.add(np.take(np.ravel(bin_image), pixels), (np.arange(n_boxes, dtype=np.intp) * n_bins)[:, None],
+                   dtype=np.intp)                                                  # (n, S)
+    sample_weights = _tiled_weights(samples, n_boxes)
     if pixel_weights is not None:
-        sample_weights = sample_weights * np.asarray(pixel_weights, dtype=np.float64).ravel()[pixels]
-        totals = sample_weights.sum(axis=1)                                        # 1 / f, box by box
+        sample_weights = sample_weights * np.take(np.asarray(pixel_weights, dtype=np.float64).ravel(), pixels).ravel()
+        totals = sample_weights.reshape(n_boxes, -1).sum(axis=1)                  # 1 / f, box by box
     if foreground is not None:
-        inside = (xs >= 0) & (xs < width) & (ys >= 0) & (ys < height)
-        sample_weights = sample_weights * (foreground.ravel()[pixels] & inside)
-    counts = np.bincount(slots.ravel(), weights=sample_weights.ravel(), minlength=n_boxes * n_bins)
+        counted = np.take(np.ravel(foreground), pixels)
+        if inside is not None:
+            counted &= inside
+        sample_weights = sample_weights * counted.ravel()
+    counts = np.bincount(slots.ravel(), weights=sample_weights, minlength=n_boxes * n_bins)
     if pixel_weights is None:
-        return counts.reshape(n_boxes, n_bins) / weights.sum()                     # f of L (10)
+        return counts, weights.sum()                                               # f of L (10)
     # A box without any weight keeps its all-zero row rather than 0 / 0.
-    return counts.reshape(n_boxes, n_bins) / np.where(totals > 0, totals, 1.0)[:, None]
+    return counts, np.where(totals > 0, totals, 1.0)[:, None]
 
 
 def bhattacharyya(histograms: np.ndarray, references: np.ndarray) -> np.ndarray:
     """Bhattacharyya coefficients ρ[h_p, q_k] = Σ_u √(h_p(u) q_k(u)) of all pairs (L (12)–(13)).
 
-    One matrix product of square roots; rounding is clipped into [0, 1] so that
-    1 − ρ = d² (W (17)) is never negative.
+    The sum runs over the non-zero bins of each h_p only: a box's histogram is built from a
+    few hundred sample points, so it fills a few dozen of its B bins (B = 512 for 8 bins per
+    channel).  No BLAS call is made, so the cost never depends on a BLAS thread pool, which
+    a small product only slows down when the machine is busy.  Rounding is clipped into
+    [0, 1] so that 1 − ρ = d² (W (17)) is never negative.
 
     Parameters
     ----------
@@ -676,7 +775,44 @@ def bhattacharyya(histograms: np.ndarray, references: np.ndarray) -> np.ndarray:
     array([[1.        , 0.70710678],
            [0.70710678, 0.        ]])
     """
-    return np.clip(np.sqrt(histograms) @ np.sqrt(references).T, 0.0, 1.0)
+    histograms = np.asarray(histograms, dtype=np.float64)
+    references = np.asarray(references, dtype=np.float64)
+    if histograms.ndim not in (1, 2) or references.ndim not in (1, 2) \
+            or histograms.shape[-1] != references.shape[-1]:
+        raise TrackingError(f"histograms (P, B) and references (K, B) need the same B, "
+                            f"got shapes {histograms.shape} and {references.shape}")
+    rows = np.ascontiguousarray(np.atleast_2d(histograms))
+    rho = _sparse_rho(rows, 1.0, np.sqrt(np.atleast_2d(references)).T.copy())
+    np.clip(rho, 0.0, 1.0, out=rho)
+    # The shapes of a matrix product: a 1-D argument loses its axis.
+    if references.ndim == 1:
+        rho = rho[:, 0]
+    return rho[0] if histograms.ndim == 1 else rho
+
+
+def _sparse_rho(counts: np.ndarray, norms, root_references: np.ndarray) -> np.ndarray:
+    """Σ_u √(h_p(u)) r_k(u) for n histograms h_p = counts_p / norm_p, shape (n, K).
+
+    ``counts`` has shape (n, B), C-contiguous; ``norms`` is one number for all, or one per box
+    (shape (n, 1)); ``root_references`` is √q, shape (B, K).  Each h_p(u) is the quotient of
+    the dense histogram, and each box's terms are added in the order of its bins, so only
+    the order of the additions differs from a dense product.
+    """
+    n_boxes, n_bins = counts.shape
+    rho = np.zeros((n_boxes, root_references.shape[1]))
+    filled = np.flatnonzero(counts != 0)               # a boolean pass: nonzero() on floats is slower
+    if filled.size == 0:
+        return rho
+    boxes = filled // n_bins
+    roots = counts.ravel()[filled]
+    roots /= norms if np.ndim(norms) == 0 else np.ravel(norms)[boxes]
+    np.sqrt(roots, out=roots)
+    terms = np.take(root_references, filled - boxes * n_bins, axis=0)              # (filled, K)
+    terms *= roots[:, None]
+    starts = np.searchsorted(boxes, np.arange(n_boxes + 1))                        # each box's first bin
+    nonempty = np.flatnonzero(starts[1:] > starts[:-1])
+    rho[nonempty] = np.add.reduceat(terms, starts[nonempty], axis=0)
+    return rho
 
 
 def false_alarm_histogram(scene_counts: np.ndarray, templates: np.ndarray, target_areas: np.ndarray | None = None,
@@ -975,10 +1111,15 @@ class ColourCue:
 
     def _candidate_histograms(self, obs: Observation, features: tuple, states: np.ndarray,
                               owner: np.ndarray) -> np.ndarray:
+        counts, norms = self._candidate_counts(obs, features, states[:, :2], _particle_sizes(obs, states, owner))
+        return counts.reshape(-1, self.config.n_bins) / norms
+
+    def _candidate_counts(self, obs: Observation, features: tuple, centres: np.ndarray,
+                          sizes: np.ndarray) -> tuple[np.ndarray, np.ndarray | float]:
+        """:func:`_kernel_counts` of the boxes at ``centres`` with ``sizes`` in this frame."""
         bin_image, weights = features
-        sizes = _particle_sizes(obs, states, owner)
-        return kernel_histograms(bin_image, states[:, :2], sizes, self.config.n_bins, self.config.samples,
-                                 pixel_weights=weights)
+        return _kernel_counts(bin_image, centres, sizes, self.config.n_bins, self.config.samples,
+                              pixel_weights=weights)
 
     def false_alarm_histogram(self, obs: Observation) -> np.ndarray:
         """q_FA of this frame, shape (B,) (W (18)); A_j = w_j · h_j from ``obs.sizes``.
@@ -991,8 +1132,7 @@ class ColourCue:
 
     def _false_alarm(self, obs: Observation, features: tuple) -> np.ndarray:
         bin_image, weights = features
-        scene = np.bincount(bin_image.ravel(), weights=None if weights is None else weights.ravel(),
-                            minlength=self.config.n_bins)                       # kernel-free, whole frame
+        scene = _scene_counts(obs, bin_image, weights, self.config.n_bins)       # kernel-free, whole frame
         if weights is None:
             amounts = obs.sizes.prod(axis=1)
         elif self.config.fa_hist == "counts":
@@ -1007,14 +1147,16 @@ class ColourCue:
         self._check_targets(obs)
         features = self._frame_features(obs)
         references = np.concatenate([self._templates, self._false_alarm(obs, features)[None, :]])   # (τ + 1, B)
+        root_references = np.sqrt(references).T.copy()                                    # (B, τ + 1), rows gathered
+        centres, sizes = states[:, :2], _particle_sizes(obs, states, owner)
         rho = np.empty((states.shape[0], references.shape[0]))
-        # The dense (block, B) histograms of a block stay small enough for the allocator to
-        # reuse their memory; histograms of all P particles at once (megabytes) would be mapped
-        # and unmapped on every call, which costs more than building them.
+        # Blocks keep every temporary of a block (its samples, its dense counts) small enough
+        # for the allocator to serve from memory it already holds, whatever P.
         for start in range(0, states.shape[0], HISTOGRAM_BLOCK):
             block = slice(start, start + HISTOGRAM_BLOCK)
-            rho[block] = bhattacharyya(self._candidate_histograms(obs, features, states[block], owner[block]),
-                                       references)
+            counts, norms = self._candidate_counts(obs, features, centres[block], sizes[block])
+            rho[block] = _sparse_rho(counts.reshape(-1, self.config.n_bins), norms, root_references)
+        np.clip(rho, 0.0, 1.0, out=rho)
         return _log_gaussian(1.0 - rho, self.config.sigma)                          # d² = 1 − ρ (W (17))
 
     def _check_targets(self, obs: Observation) -> None:
@@ -1067,14 +1209,13 @@ class ForegroundColourCue(ColourCue):
         # The template describes the target, not how much of its box it fills: normalise to 1.
         return np.where(mass > 0, masked / np.where(mass > 0, mass, 1.0), plain)
 
-    def _candidate_histograms(self, obs: Observation, features: tuple, states: np.ndarray,
-                              owner: np.ndarray) -> np.ndarray:
+    def _candidate_counts(self, obs: Observation, features: tuple, centres: np.ndarray,
+                          sizes: np.ndarray) -> tuple[np.ndarray, np.ndarray | float]:
         if obs.foreground is None:
             raise TrackingError("the foreground cue needs Observation.foreground, the background model's mask; got None")
         bin_image, weights = features
-        sizes = _particle_sizes(obs, states, owner)
-        return kernel_histograms(bin_image, states[:, :2], sizes, self.config.n_bins, self.config.samples,
-                                 obs.foreground, pixel_weights=weights)
+        return _kernel_counts(bin_image, centres, sizes, self.config.n_bins, self.config.samples, obs.foreground,
+                              pixel_weights=weights)
 
 
 # -- edge cue -------------------------------------------------------------------------------------
@@ -1177,6 +1318,19 @@ class EdgeCue(ColourCue):
 
     def _frame_features(self, obs: Observation) -> tuple[np.ndarray, np.ndarray]:
         return obs.orientation_bins(self.config.bins, self.config.unsigned, self.config.min_gradient)
+
+
+def _scene_counts(obs: Observation, bin_image: np.ndarray, weights: np.ndarray | None, n_bins: int) -> np.ndarray:
+    """The whole frame's count (or weight) per bin, computed once per frame for the cues that share a bin image."""
+    key = ("scene", n_bins, id(bin_image), id(weights))
+    known = obs._bins.get(key)
+    # The arrays are kept with their counts, so an id is never taken for that of a newer array.
+    if known is None or known[0] is not bin_image or known[1] is not weights:
+        counts = np.bincount(bin_image.ravel(), weights=None if weights is None else weights.ravel(),
+                             minlength=n_bins)
+        counts.flags.writeable = False
+        known = obs._bins[key] = (bin_image, weights, counts)
+    return known[2]
 
 
 def _box_sums(weights: np.ndarray, centres: np.ndarray, sizes: np.ndarray) -> np.ndarray:

@@ -528,3 +528,90 @@ def test_scores_of_many_particles_are_built_block_by_block_without_changing_them
     references = np.concatenate([cue.templates, cue.false_alarm_histogram(obs)[None, :]])
     whole = _log_gaussian(1.0 - bhattacharyya(cue.histograms(obs, states, owner), references), cue.config.sigma)
     assert np.allclose(cue.log_likelihoods(obs, states, owner), whole, rtol=0, atol=1e-12)
+
+
+# -- the sparse Bhattacharyya sums and the compact bin image --------------------------------------
+def test_bhattacharyya_over_the_filled_bins_equals_the_dense_product_to_rounding():
+    rng = np.random.default_rng(11)
+    histograms = rng.random((60, 512)) * (rng.random((60, 512)) < 0.05)
+    histograms[[3, 17]] = 0.0                                     # boxes without any weight
+    histograms /= np.maximum(histograms.sum(axis=1, keepdims=True), 1e-300)
+    references = rng.random((9, 512)) * (rng.random((9, 512)) < 0.3)
+    references /= references.sum(axis=1, keepdims=True)
+    dense = np.clip(np.sqrt(histograms) @ np.sqrt(references).T, 0.0, 1.0)
+    rho = bhattacharyya(histograms, references)
+    assert rho.shape == (60, 9)
+    np.testing.assert_allclose(rho, dense, rtol=0, atol=1e-15)
+    assert (rho[[3, 17]] == 0.0).all()
+    # One histogram or one reference drops its axis, as in a matrix product.
+    np.testing.assert_allclose(bhattacharyya(histograms[5], references), dense[5], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(bhattacharyya(histograms, references[2]), dense[:, 2], rtol=0, atol=1e-15)
+    with pytest.raises(TrackingError, match="same B"):
+        bhattacharyya(histograms, references[:, :8])
+
+
+@pytest.mark.parametrize("bins", [1, 7, 8, 16, 40, 41])
+def test_colour_bins_are_compact_and_exact(bins):
+    rng = np.random.default_rng(bins)
+    image = rng.integers(0, 256, size=(30, 20, 3), dtype=np.uint8)
+    image[0, :3] = [(0, 0, 0), (255, 255, 255), (255, 0, 128)]
+    channels = image.astype(np.int64) * bins // 256
+    expected = (channels[..., 2] * bins + channels[..., 1]) * bins + channels[..., 0]
+    found = colour_bins(image, bins)
+    assert found.dtype == (np.uint16 if bins <= 40 else np.intp)
+    np.testing.assert_array_equal(found, expected)
+
+
+def test_histograms_of_a_compact_bin_image_equal_those_of_an_intp_one():
+    rng = np.random.default_rng(4)
+    image = rng.integers(0, 256, size=(40, 50, 3), dtype=np.uint8)
+    mask = rng.random((40, 50)) < 0.5
+    compact = colour_bins(image, 8)
+    centres = np.column_stack([rng.uniform(-10, 60, 30), rng.uniform(-10, 50, 30)])
+    sizes = rng.uniform(4, 30, (30, 2))
+    for foreground in (None, mask):
+        np.testing.assert_array_equal(
+            cues.kernel_histograms(compact, centres, sizes, 512, (6, 12), foreground),
+            cues.kernel_histograms(compact.astype(np.intp), centres, sizes, 512, (6, 12), foreground))
+
+
+def test_both_colour_cues_count_the_scene_once_per_frame(monkeypatch):
+    image, boxes = scene_with_targets()
+    mask = np.zeros(image.shape[:2], bool)
+    mask[20:60, 30:50] = True
+    colour, foreground = ColourCue(), ForegroundColourCue()
+    colour.set_templates(image, boxes)
+    foreground.set_templates(image, boxes, foreground=mask)
+    obs = observation(image, boxes, foreground=mask)
+    pixels = image.shape[0] * image.shape[1]
+    scene_counts = []
+    real = np.bincount
+
+    def counting(x, *args, **kwargs):
+        if np.size(x) == pixels:
+            scene_counts.append(1)
+        return real(x, *args, **kwargs)
+
+    monkeypatch.setattr(cues.np, "bincount", counting)
+    states = states_at((40, 40), (100, 60))
+    colour.log_likelihoods(obs, states, np.array([0, 1]))
+    foreground.log_likelihoods(obs, states, np.array([0, 1]))
+    monkeypatch.undo()
+    assert len(scene_counts) == 1
+    np.testing.assert_array_equal(colour.false_alarm_histogram(obs),
+                                  colour.false_alarm_histogram(observation(image, boxes, foreground=mask)))
+
+
+def test_background_masks_of_successive_frames_are_separate_arrays():
+    rng = np.random.default_rng(8)
+    scene = textured_background(rng)
+    model = BackgroundModel()
+    model.warm_up(noisy(scene, rng) for _ in range(20))
+    frame = noisy(scene, rng)
+    frame[10:20, 10:20] = GREEN
+    first = model.apply(frame)
+    kept = first.copy()
+    second = model.apply(noisy(scene, rng))
+    assert not np.shares_memory(first, second)
+    np.testing.assert_array_equal(first, kept)
+    assert first[10:20, 10:20].all() and not second[10:20, 10:20].any()

@@ -656,3 +656,30 @@ def test_motion_settings_refuse_bools_text_and_nan(value):
 
     with pytest.raises(TrackingError, match="sigma_pos must be"):
         MotionConfig(sigma_pos=value)
+
+
+def test_sets_made_by_the_operations_are_read_only_and_equal_to_checked_ones():
+    rng = np.random.default_rng(21)
+    particles = ParticleSet(random_states(6), rng.normal(size=6))
+    likelihood = rng.normal(size=6)
+    made = {
+        "reweight": (particles.reweight(likelihood), ParticleSet(particles.states, particles.log_weights + likelihood)),
+        "take": (particles.take(np.array([5, 0, 0, 2])), ParticleSet(particles.states[[5, 0, 0, 2]])),
+    }
+    for name, (fast, checked) in made.items():
+        assert np.array_equal(fast.states, checked.states), name
+        assert np.array_equal(fast.log_weights, checked.log_weights), name
+        for array in (fast.states, fast.log_weights):
+            with pytest.raises(ValueError):
+                array[0] = 0.0
+    # A reweighted set shares the read-only states of its source instead of copying them.
+    assert made["reweight"][0].states is particles.states
+    assert not np.shares_memory(made["take"][0].states, particles.states)
+
+
+def test_reweight_with_nan_or_infinite_likelihoods_falls_back_to_uniform():
+    particles = ParticleSet(random_states(3), np.log([0.2, 0.3, 0.5]))
+    for bad in ([0.0, math.nan, 0.0], [0.0, math.inf, 0.0]):
+        with pytest.warns(DegenerateWeightsWarning, match="NaN or \\+inf"):
+            reweighted = particles.reweight(bad)
+        np.testing.assert_allclose(reweighted.weights(), 1 / 3)
