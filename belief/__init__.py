@@ -5,7 +5,9 @@ The core objects:
 * :class:`Frame`: named hypotheses; :class:`Element`: a member of the hyper-power set D^Θ;
 * :class:`Model`: free DSm, Shafer, hybrid or tracking constraints;
 * :func:`hyper_power_set`: D^Θ enumerated (n ≤ 6 on the free model);
-* :class:`MassFunction`: one mass function; :class:`MassBatch`: N of them as an (N, K) array.
+* :class:`MassFunction`: one mass function; :class:`MassBatch`: N of them as an (N, K) array;
+* :func:`combine`: the rules of :data:`RULES`, with closed forms for Bayesian sources
+  (:class:`ClosedFormBatch`, :func:`exclusive_split`) and :func:`inconsistency`, R of W (10).
 
 >>> from belief import Frame, MassFunction
 >>> m = MassFunction({"a": 0.6, "a|b": 0.4}, frame=["a", "b"])
@@ -14,6 +16,7 @@ The core objects:
 """
 
 from belief.batch import MassBatch
+from belief.bayesian import ClosedFormBatch, exclusive_split
 from belief.errors import (
     BeliefError,
     FormatError,
@@ -30,12 +33,14 @@ from belief.frame import Element, Frame
 from belief.lattice import HyperPowerSet, hyper_power_set
 from belief.mass import MassFunction
 from belief.model import Model
-from belief.rules import RULES, UnknownRuleError, combine, sequential
+from belief.rules import ENGINES, RULES, UnknownRuleError, combine, inconsistency, sequential
 
 __version__ = "0.1.0"
 
 __all__ = [
     "BeliefError",
+    "ClosedFormBatch",
+    "ENGINES",
     "Element",
     "FormatError",
     "Frame",
@@ -54,6 +59,8 @@ __all__ = [
     "UnknownRuleError",
     "RULES",
     "combine",
+    "exclusive_split",
+    "inconsistency",
     "sequential",
     "hyper_power_set",
     "__version__",

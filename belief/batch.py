@@ -24,7 +24,7 @@ from belief.model import Model
 if TYPE_CHECKING:
     from belief.mass import MassFunction
 
-__all__ = ["MassBatch", "measure_plan", "MeasurePlan", "SUM_TOLERANCE", "resolve_model"]
+__all__ = ["MassBatch", "measure_plan", "MeasurePlan", "SUM_TOLERANCE", "resolve_model", "check_select"]
 
 #: Masses must sum to one within this absolute tolerance.
 SUM_TOLERANCE = 1e-9
@@ -92,6 +92,11 @@ class MeasurePlan:
     def superset(self) -> np.ndarray:
         """1 where A ⊆ X (commonality)."""
         return self._table(lambda x, a: a <= x)
+
+    @cached_property
+    def equal(self) -> np.ndarray:
+        """1 where X = A under the model (the mass of A); an empty query matches the ∅ column."""
+        return self._table(lambda x, a: x == a)
 
     @cached_property
     def focal_cardinality(self) -> np.ndarray:
@@ -202,6 +207,62 @@ def _row_sums(values: np.ndarray) -> np.ndarray:
     return values.sum(axis=1)
 
 
+def check_select(select, n_rows: int, n_queries: int) -> np.ndarray:
+    """The ``select=`` argument of the batch measures as an int64 array of shape (N,).
+
+    Parameters
+    ----------
+    select : array_like of int, shape (N,)
+        For row n, the position in the query list of the one query to evaluate.
+    n_rows, n_queries : int
+        N and the number of queries Q.
+
+    Returns
+    -------
+    ndarray of int64, shape (N,)
+
+    Raises
+    ------
+    InvalidMassError
+        If ``select`` is not integer, has the wrong shape, or names a query that does not exist.
+
+    Examples
+    --------
+    >>> check_select([1, 0], 2, 2)
+    array([1, 0])
+    >>> check_select([2, 0], 2, 2)
+    Traceback (most recent call last):
+    ...
+    belief.errors.InvalidMassError: select=[2, 0] picks query 2 in row 0, but there are 2 queries (0 to 1)
+    """
+    array = np.asarray(select)
+    if array.dtype == bool or not np.issubdtype(array.dtype, np.integer):
+        raise InvalidMassError(f"select must be an array of integer query positions, got dtype {array.dtype}")
+    if array.shape != (n_rows,):
+        raise InvalidMassError(f"select must have shape ({n_rows},), one query position per row, got {array.shape}")
+    array = array.astype(np.int64, copy=False)
+    if n_rows:
+        bad = (array < 0) | (array >= n_queries)
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            shown = array.tolist() if n_rows <= 8 else f"[{array[row]}, ...]"
+            raise InvalidMassError(f"select={shown} picks query {int(array[row])} in row {row}, but there are "
+                                   f"{n_queries} queries (0 to {n_queries - 1})")
+    return array
+
+
+@lru_cache(maxsize=256)
+def _singleton_focal(model: Model):
+    """θ_1, …, θ_n under ``model`` in frame order, their hashed focal key, and whether none is empty.
+
+    Cached per model, so that :meth:`MassBatch.bayesian` costs no Python loop over the frame.
+    """
+    from belief.plan import FocalKey
+
+    focal = tuple(model.reduce(x) for x in model.frame.singletons)
+    return focal, FocalKey(focal), all(bool(x.terms) for x in focal)
+
+
 # -- the batch -----------------------------------------------------------------------------------
 class MassBatch:
     """N mass functions over one ordered list of K focal elements.
@@ -278,6 +339,64 @@ class MassBatch:
         values = np.asarray(values, dtype=np.float64)
         values.flags.writeable = False
         obj.model, obj.focal, obj.values, obj._canonical, obj._key = model, focal, values, canonical, None
+        return obj
+
+    @classmethod
+    def bayesian(cls, values, *, frame=None, model=None, validate: bool = True) -> "MassBatch":
+        """A batch of Bayesian mass functions: probability vectors over the hypotheses.
+
+        The focal elements are the singletons θ_1, …, θ_n in frame order (cached per model,
+        so a call costs no loop over the frame); :func:`~belief.rules.combine` recognises
+        such batches and fuses them with closed forms (see :mod:`belief.bayesian`).
+
+        Parameters
+        ----------
+        values : array_like, shape (N, n) or (n,)
+            Row k gives m(θ_1), …, m(θ_n) of the k-th mass function; one row may be given
+            as a vector.
+        frame, model :
+            As for :class:`~belief.mass.MassFunction` (a model alone is enough).
+        validate : bool
+            Check every row (finite, non-negative, sums to one within
+            :data:`SUM_TOLERANCE`) and copy the array.  With ``validate=False`` the array is
+            used as it is, without a copy: the caller vouches for it and must not modify it.
+
+        Returns
+        -------
+        MassBatch
+            N rows over the n singletons.
+
+        Raises
+        ------
+        InvalidMassError
+            For a wrong shape, or (with ``validate``) a row that is not a mass function.
+
+        Examples
+        --------
+        >>> from belief import Model
+        >>> cues = MassBatch.bayesian([[0.6, 0.3, 0.1], [0.2, 0.7, 0.1]], model=Model.for_targets(2))
+        >>> [str(x) for x in cues.focal], cues.bel("t1")
+        (['t1', 't2', 'FA'], array([0.6, 0.2]))
+        """
+        model = resolve_model(frame, model)
+        focal, key, none_empty = _singleton_focal(model)
+        if not none_empty:
+            # A hypothesis that the model declares empty: let the general constructor move its mass.
+            return cls(focal, values, model=model, subnormal=not validate, validate=validate)
+        array = np.asarray(values, dtype=np.float64)
+        if array.ndim == 1 and array.size == len(focal):
+            array = array.reshape(1, -1)
+        if array.ndim != 2 or array.shape[1] != len(focal):
+            raise InvalidMassError(f"values must have shape (N, {len(focal)}) for the {len(focal)} hypotheses "
+                                   f"of the frame, got {array.shape}")
+        if validate:
+            array = array.copy()
+            # No singleton is empty under the model, so the per-element check can be skipped.
+            check_masses(array, focal, model, subnormal=True)
+        else:
+            array = array.view()          # read-only view: the caller's own array keeps its flags
+        obj = cls._trusted(model, focal, array, canonical=True)
+        obj._key = key
         return obj
 
     @property
@@ -384,15 +503,50 @@ class MassBatch:
         return self.values * keep / scale[:, None]
 
     # -- measures -----------------------------------------------------------------------------------
-    def bel(self, queries) -> np.ndarray:
-        """Belief Bel(A) = Σ_{∅≠B⊆A} m(B) (W (8)); shape (N,) for one query, (N, Q) for a list."""
-        plan, single = self._plan(queries)
-        return self._shape(self.values @ plan.subset, single)
+    def _finish(self, result: np.ndarray, single: bool, select) -> np.ndarray:
+        """(N, Q) -> (N,) for one query, (N, Q) for a list, or (N,) of the selected query per row."""
+        if select is None:
+            return self._shape(result, single)
+        chosen = check_select(select, result.shape[0], result.shape[1])
+        return result[np.arange(result.shape[0]), chosen]
 
-    def pls(self, queries) -> np.ndarray:
-        """Plausibility Pls(A) = Σ_{B∩A≠∅} m(B) (W (9)); shape (N,) or (N, Q)."""
+    def bel(self, queries, *, select=None) -> np.ndarray:
+        """Belief Bel(A) = Σ_{∅≠B⊆A} m(B) (W (8)).
+
+        Parameters
+        ----------
+        queries : Element, str or sequence of them
+        select : array_like of int, shape (N,), optional
+            Evaluate only ``queries[select[n]]`` in row n.
+
+        Returns
+        -------
+        ndarray
+            Shape (N,) for one query or with ``select``, (N, Q) for a list of Q queries.
+        """
         plan, single = self._plan(queries)
-        return self._shape(self.values @ plan.meets, single)
+        return self._finish(self.values @ plan.subset, single, select)
+
+    def pls(self, queries, *, select=None) -> np.ndarray:
+        """Plausibility Pls(A) = Σ_{B∩A≠∅} m(B) (W (9)); shapes and ``select`` as :meth:`bel`."""
+        plan, single = self._plan(queries)
+        return self._finish(self.values @ plan.meets, single, select)
+
+    def mass(self, queries, *, select=None) -> np.ndarray:
+        """The mass m(A) of each query (0 for an element that is not focal); shapes and ``select`` as :meth:`bel`.
+
+        A query that is empty under the model (∅ itself, or e.g. ``t1&FA`` under the tracking
+        model) reads m(∅).
+
+        >>> batch = MassBatch(["a", "a|b"], [[0.6, 0.4], [0.1, 0.9]], frame=["a", "b"])
+        >>> batch.mass(["a", "b", "a|b"])
+        array([[0.6, 0. , 0.4],
+               [0.1, 0. , 0.9]])
+        >>> batch.mass(["a", "a|b"], select=[1, 0])
+        array([0.4, 0.1])
+        """
+        plan, single = self._plan(queries)
+        return self._finish(self.values @ plan.equal, single, select)
 
     def q(self, queries) -> np.ndarray:
         """Commonality q(A) = Σ_{B⊇A} m(B); shape (N,) or (N, Q)."""
@@ -401,13 +555,19 @@ class MassBatch:
 
     commonality = q
 
-    def betp(self, queries) -> np.ndarray:
+    def betp(self, queries, *, select=None) -> np.ndarray:
         """Generalised pignistic probability BetP(A) = Σ_X m(X) C_M(X∩A)/C_M(X).
 
-        Mass on ∅ is removed first and the rest rescaled by 1 - m(∅).
+        Mass on ∅ is removed first and the rest rescaled by 1 - m(∅) (computed as the sum
+        of the non-empty masses); shapes and ``select`` as :meth:`bel`.
+
+        Raises
+        ------
+        TotalConflictError
+            If a row has m(∅) = 1.
         """
         plan, single = self._plan(queries)
-        return self._shape(self._normal_values("BetP") @ plan.ratio, single)
+        return self._finish(self._normal_values("BetP") @ plan.ratio, single, select)
 
     def dsmp(self, queries, epsilon: float = 0.001) -> np.ndarray:
         """DSmP_ε(A), the proportional probabilistic transformation of DSmT.
