@@ -57,7 +57,7 @@ class AppearanceFollower:
     >>> follower = AppearanceFollower(AdaptiveConfig(), [cue], update=False)
     >>> obs = Observation(image, None, [[35.0, 30.0]], [[10.0, 20.0]], np.zeros((0, 2)))
     >>> similarity, flags = follower.follow(obs, np.array([[35.0, 30.0, 0, 0, 0]]), [7])
-    >>> similarity.tolist(), flags.tolist(), follower.similarity([7, 8]).tolist()
+    >>> similarity.round(12).tolist(), flags.tolist(), follower.similarity([7, 8]).round(12).tolist()
     ([1.0], [False], [1.0, 0.8])
     """
 

@@ -134,14 +134,14 @@ class TrackerConfig:
     r_mode: str = "paper"
     empty_mode: str = "union"
     masses: str = "relative"
-    motion: MotionConfig = field(default_factory=lambda: MotionConfig(sigma_pos=3.0, sigma_vel=0.5))
+    motion: MotionConfig = field(default_factory=MotionConfig)
     resampling: str = "systematic"
     ess_threshold: float = 1.0
     adaptive_fusion: AdaptiveConfig = field(default_factory=AdaptiveConfig)
     template_update: bool = False
     adaptive_particles: bool = False
     kappa: str = "mass"
-    location: LocationConfig = field(default_factory=lambda: LocationConfig(fa_mode="gate", reference="predicted"))
+    location: LocationConfig = field(default_factory=LocationConfig)
     colour: ColourConfig = field(default_factory=ColourConfig)
     foreground: ColourConfig = field(default_factory=ColourConfig)
     edges: EdgeConfig = field(default_factory=EdgeConfig)

@@ -18,7 +18,7 @@ Four cues are provided, all registered in :data:`CUES` (see :func:`make_cue`):
 Pixel geometry
 --------------
 Pixel (column i, row j) covers the square [i, i+1) × [j, j+1).  A box ``(x, y, w, h)`` in
-0-based pixel coordinates therefore has centre ``(x + w/2, y + h/2)`` (:func:`box_centres`)
+0-based pixel coordinates therefore has centre ``(x + w/2, y + h/2)`` (:func:`~plugins.video_tracking.boxes.box_centres`)
 and half-sizes ``(w/2, h/2)``, and a point ``(px, py)`` falls in pixel ``(⌊px⌋, ⌊py⌋)``.
 The box of particle p has size ``sizes[owner[p]] * exp(log_scale[p])``.
 
@@ -38,6 +38,8 @@ from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
+from plugins.video_tracking import checks
+from plugins.video_tracking.boxes import box_centres, check_boxes
 from plugins.video_tracking.errors import TrackingError, UnknownCueError
 
 __all__ = [
@@ -53,25 +55,14 @@ __all__ = [
     "EdgeCue",
     "CUES",
     "make_cue",
-    "box_centres",
     "colour_bins",
     "orientation_bins",
     "kernel_grid",
     "kernel_histograms",
     "bhattacharyya",
     "false_alarm_histogram",
-    "LOCATION_FA_MODES",
-    "FA_HISTOGRAMS",
 ]
 
-#: How the location cue measures "away from the targets" for FA (SPEC B.3, W (24)).
-LOCATION_FA_MODES = ("centroid", "nearest", "gate")
-
-#: What a target's location Gaussian is centred on (:class:`LocationConfig`).
-LOCATION_REFERENCES = ("previous", "predicted")
-
-#: How the false-alarm colour histogram removes the target colours from the scene (W (18)).
-FA_HISTOGRAMS = ("subtract", "counts")
 
 #: Joint RGB histograms have bins³ bins; 16³ = 4096 (the largest of the papers, C) keeps a
 #: (P, B) float array of 800 particles near 26 MB.
@@ -272,11 +263,6 @@ def _positive(owner: str, name: str, value) -> float:
     return float(value)
 
 
-def _choice(owner: str, name: str, value, choices: tuple[str, ...]) -> None:
-    if value not in choices:
-        raise TrackingError(f"{owner}.{name} must be one of {', '.join(choices)}, got {value!r}")
-
-
 def _count(owner: str, name: str, value) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise TrackingError(f"{owner}.{name} must be a positive integer, got {value!r}")
@@ -292,30 +278,27 @@ class LocationConfig:
     ----------
     sigma : float
         σ_loc in pixels of the Gaussians of W (22) and W (23) (SPEC default 10 px).
-    fa_mode : {"centroid", "nearest", "gate"}
-        FA distance to the centroid of the τ centres (W (24) generalised), or to the nearest
-        centre, with d_max measured the same way over the particles of t − 1; or ``"gate"``:
-        distance to the nearest centre with a fixed d_max = ``gate`` · σ, so that FA is
-        unlikely near every target and certain beyond the gate, however the targets spread
-        over the image.
     gate : float
-        d_max in units of σ for ``fa_mode="gate"``.
-    reference : {"previous", "predicted"}
-        Centre each target's Gaussian on its estimate at t − 1 (W (22)), or on the estimate
-        moved on by its estimated velocity (x̂ + v̂·dt), so that the cue does not pull a moving
-        target back.  The tracker supplies the centres.
+        The tracker's FA: certain beyond ``gate`` · σ from the nearest target (not read
+        when ``literal``).
+    literal : bool
+        False (default): each target's Gaussian is centred on its estimate moved on by its
+        estimated velocity (x̂ + v̂·dt), so that the cue does not pull a moving target back,
+        and FA grows with the distance to the *nearest* target up to a fixed d_max = ``gate``
+        · σ, so that FA is unlikely near every target and certain beyond the gate, however
+        the targets spread over the image.  True: W (22)–(24) as printed, centred on the
+        estimates at t − 1, FA from the centroid of the targets with d_max from the particles
+        of t − 1.  The tracker supplies the centres.
     """
 
     sigma: float = 10.0
-    fa_mode: str = "centroid"
     gate: float = 3.0
-    reference: str = "previous"
+    literal: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "sigma", _positive("LocationConfig", "sigma", self.sigma))
         object.__setattr__(self, "gate", _positive("LocationConfig", "gate", self.gate))
-        _choice("LocationConfig", "fa_mode", self.fa_mode, LOCATION_FA_MODES)
-        _choice("LocationConfig", "reference", self.reference, LOCATION_REFERENCES)
+        object.__setattr__(self, "literal", checks.flag("LocationConfig.literal", self.literal))
 
 
 class LocationCue:
@@ -324,26 +307,33 @@ class LocationCue:
     Target j: log p_j = −‖x − ĉ_j‖² / (2σ²), the log of G(‖x − ĉ_j‖; σ) (W (22)), with x the
     particle's propagated centre and ĉ_j target j's estimate at t − 1.
 
-    FA: log p_FA = −max(d_max − d, 0)² / (2σ²) (W (23)), with d the distance of x to the
-    centroid c̄ of the τ previous centres (W (24); or to the nearest centre with
-    ``fa_mode="nearest"``), and d_max the largest such distance among all particles of t − 1,
-    floored at σ.  FA grows as a particle moves away from the targets; the clamp keeps it at
-    its maximum, log p_FA = 0, outside the circle of radius d_max instead of letting it fall
-    again (SPEC B.3).
+    FA: log p_FA = −max(d_max − d, 0)² / (2σ²) (W (23)).  FA grows as a particle moves
+    away from the targets; the clamp keeps it at its maximum, log p_FA = 0, outside the
+    circle of radius d_max instead of letting it fall again (SPEC B.3).  By default d is the
+    distance of x to the nearest centre and d_max = ``gate`` · σ; with ``literal`` d is the
+    distance to the centroid c̄ of the τ centres (W (24)) and d_max the largest such distance
+    among all particles of t − 1, floored at σ.
 
     Examples
     --------
-    Targets at (100, 50) and (140, 70), so c̄ = (120, 60); the particles of t − 1 reach
-    (90, 45), so d_max = √1125 ≈ 33.5.  A particle on target 1 is at d = √500 from c̄:
+    W (22)–(24): targets at (100, 50) and (140, 70), so c̄ = (120, 60); the particles of
+    t − 1 reach (90, 45), so d_max = √1125 ≈ 33.5.  A particle on target 1 is at d = √500
+    from c̄:
 
     >>> obs = Observation(np.zeros((120, 200, 3), np.uint8), None,
     ...                   centres=[[100, 50], [140, 70]], sizes=[[20, 40], [20, 40]],
     ...                   previous_particles=[[90, 45], [150, 75]])
-    >>> cue = LocationCue(LocationConfig(sigma=10.0))
+    >>> cue = LocationCue(LocationConfig(sigma=10.0, literal=True))
     >>> states = np.array([[100.0, 50.0, 0, 0, 0], [300.0, 60.0, 0, 0, 0]])
     >>> cue.log_likelihoods(obs, states, owner=np.array([0, 1])).round(3)
     array([[   0.   ,  -10.   ,   -0.625],
            [-200.5  , -128.5  ,    0.   ]])
+
+    The gate (3σ = 30 px): on its target the particle is 30 px from the gate, log p_FA = −4.5;
+    the far one is beyond it:
+
+    >>> LocationCue(LocationConfig(sigma=10.0)).log_likelihoods(obs, states, np.array([0, 1]))[:, 2].tolist()
+    [-4.5, 0.0]
     """
 
     name: ClassVar[str] = "location"
@@ -370,11 +360,13 @@ class LocationCue:
         positions = states[:, :2]
         target_sq = _squared_distances(positions, obs.centres)                      # (P, τ)
         scores[:, :tau] = _log_gaussian(target_sq, self.config.sigma)
-        distance = self._fa_distance(positions, obs.centres, target_sq)            # (P,)
-        if self.config.fa_mode == "gate":
+        if not self.config.literal:
+            distance = np.sqrt(target_sq.min(axis=1, initial=np.inf))                # to the nearest target
             d_max = self.config.gate * self.config.sigma
         else:
-            previous = self._fa_distance(obs.previous_particles, obs.centres)      # (Q,)
+            centroid = obs.centres.mean(axis=0)                                      # W (24)
+            distance = np.linalg.norm(positions - centroid, axis=1)
+            previous = np.linalg.norm(obs.previous_particles - centroid, axis=1)     # (Q,)
             # A circle thinner than σ would make FA jump from 0 to its maximum within a few
             # pixels of the targets; the floor keeps it as smooth as the target Gaussians.
             d_max = max(float(previous.max(initial=0.0)), self.config.sigma)
@@ -382,13 +374,6 @@ class LocationCue:
         scores[:, tau] = _log_gaussian(gap ** 2, self.config.sigma)
         return scores
 
-    def _fa_distance(self, points: np.ndarray, centres: np.ndarray, squared: np.ndarray | None = None) -> np.ndarray:
-        """d of W (24): distance to the centroid of the centres, or to the nearest centre."""
-        if self.config.fa_mode == "centroid":
-            return np.linalg.norm(points - centres.mean(axis=0), axis=1)
-        if squared is None:
-            squared = _squared_distances(points, centres)
-        return np.sqrt(squared.min(axis=1, initial=np.inf))
 
 
 def _log_gaussian(squared_distance: np.ndarray, sigma: float) -> np.ndarray:
@@ -410,18 +395,6 @@ def _squared_distances(points: np.ndarray, centres: np.ndarray) -> np.ndarray:
 
 
 # -- colour histograms (vectorised over particles) ------------------------------------------------
-def box_centres(boxes) -> np.ndarray:
-    """Centres ``(x + w/2, y + h/2)`` of boxes ``(x, y, w, h)``, shape (n, 2).
-
-    Examples
-    --------
-    >>> box_centres([[10, 20, 6, 8]])
-    array([[13., 24.]])
-    """
-    boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-    return boxes[:, :2] + boxes[:, 2:] / 2.0
-
-
 def colour_bins(image: np.ndarray, bins: int) -> np.ndarray:
     """The joint-RGB bin of every pixel: r·bins² + g·bins + b, each channel cut into ``bins``.
 
@@ -815,15 +788,12 @@ def _sparse_rho(counts: np.ndarray, norms, root_references: np.ndarray) -> np.nd
     return rho
 
 
-def false_alarm_histogram(scene_counts: np.ndarray, templates: np.ndarray, target_areas: np.ndarray | None = None,
-                          mode: str = "subtract") -> np.ndarray:
+def false_alarm_histogram(scene_counts: np.ndarray, templates: np.ndarray) -> np.ndarray:
     """The colours of the scene that are not the targets', q_FA (W (18)).
 
-    ``"subtract"``: q_FA ∝ max(q_scene − Σ_j q_j, 0) with q_scene the normalised scene
-    histogram — the literal W (18), which removes a target colour from FA entirely.
-    ``"counts"``: q_FA ∝ max(n_scene − Σ_j A_j q_j, 0), subtracting the pixels the targets
-    cover (A_j of them) from the scene's pixel counts.  Either way the result is renormalised
-    to sum 1, and is uniform if nothing is left (SPEC B.3) — as when the scene itself is empty,
+    q_FA ∝ max(q_scene − Σ_j q_j, 0) with q_scene the normalised scene histogram, as W (18)
+    prints it: a target's colour is removed from FA entirely.  The result is renormalised to
+    sum 1, and is uniform if nothing is left (SPEC B.3) — as when the scene itself is empty,
     an edge histogram of a frame without edges.
 
     Parameters
@@ -833,9 +803,6 @@ def false_alarm_histogram(scene_counts: np.ndarray, templates: np.ndarray, targe
         sums of their weights.
     templates : ndarray, shape (τ, B)
         The target templates q_j, rows summing to 1.
-    target_areas : ndarray, shape (τ,), optional
-        A_j in pixels, or in pixel weight (needed by ``"counts"``).
-    mode : {"subtract", "counts"}
 
     Returns
     -------
@@ -849,23 +816,12 @@ def false_alarm_histogram(scene_counts: np.ndarray, templates: np.ndarray, targe
     >>> scene, target = np.array([90.0, 10.0, 0.0]), np.array([[0.0, 1.0, 0.0]])
     >>> false_alarm_histogram(scene, target)
     array([1., 0., 0.])
-
-    With ``"counts"``, a box of 20 pixels, half of them background, removes 10 pixels of each:
-
-    >>> false_alarm_histogram(scene, np.array([[0.5, 0.5, 0.0]]), np.array([20.0]), mode="counts")
-    array([1., 0., 0.])
     """
-    _choice("false_alarm_histogram", "mode", mode, FA_HISTOGRAMS)
     scene_counts = np.asarray(scene_counts, dtype=np.float64)
     if not scene_counts.sum() > 0:
         return np.full(scene_counts.shape, 1.0 / scene_counts.size)
-    if mode == "subtract":
-        scene, targets = scene_counts / scene_counts.sum(), templates.sum(axis=0)
-    else:
-        if target_areas is None:
-            raise TrackingError('fa_hist="counts" needs the target areas')
-        scene, targets = scene_counts, np.asarray(target_areas, dtype=np.float64) @ templates
-    residual = scene - targets
+    scene = scene_counts / scene_counts.sum()
+    residual = scene - templates.sum(axis=0)
     # What survives the subtraction by rounding alone (~1e-17 of the scene) is not a colour of
     # the scene; renormalised, it would become a spurious FA histogram.  This also clamps at 0.
     residual[residual <= RESIDUAL_TOLERANCE * scene.sum()] = 0.0
@@ -889,14 +845,11 @@ class ColourConfig:
     samples : (int, int)
         Sample points across and down a box (:func:`kernel_grid`); the default suits upright
         people, twice as tall as wide.
-    fa_hist : {"subtract", "counts"}
-        How q_FA removes the target colours from the scene (:func:`false_alarm_histogram`).
     """
 
     bins: int = 8
     sigma: float = 0.15
     samples: tuple[int, int] = (12, 24)
-    fa_hist: str = "subtract"
 
     def __post_init__(self) -> None:
         bins = _count("ColourConfig", "bins", self.bins)
@@ -906,7 +859,6 @@ class ColourConfig:
         object.__setattr__(self, "bins", bins)
         object.__setattr__(self, "sigma", _positive("ColourConfig", "sigma", self.sigma))
         object.__setattr__(self, "samples", _samples("ColourConfig", self.samples))
-        _choice("ColourConfig", "fa_hist", self.fa_hist, FA_HISTOGRAMS)
 
     @property
     def n_bins(self) -> int:
@@ -1095,7 +1047,7 @@ class ColourCue:
         image = _checked_image(image)
         if foreground is not None:
             foreground = _checked_mask(foreground, image.shape[:2])
-        boxes = _boxes(boxes, image.shape[:2])
+        boxes = check_boxes(boxes, "template boxes", image_shape=image.shape[:2])
         return self._template_histograms(self._image_features(image), boxes, foreground)
 
     def _template_histograms(self, features: tuple, boxes: np.ndarray, foreground) -> np.ndarray:
@@ -1133,13 +1085,7 @@ class ColourCue:
     def _false_alarm(self, obs: Observation, features: tuple) -> np.ndarray:
         bin_image, weights = features
         scene = _scene_counts(obs, bin_image, weights, self.config.n_bins)       # kernel-free, whole frame
-        if weights is None:
-            amounts = obs.sizes.prod(axis=1)
-        elif self.config.fa_hist == "counts":
-            amounts = _box_sums(weights, obs.centres, obs.sizes)
-        else:
-            amounts = None                                                      # "subtract" needs none
-        return false_alarm_histogram(scene, self._templates, amounts, self.config.fa_hist)
+        return false_alarm_histogram(scene, self._templates)
 
     def log_likelihoods(self, obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
         """log p_1 … log p_τ, log p_FA = −(1 − ρ) / (2σ²) of every particle, shape (P, τ + 1) (W (16)–(19))."""
@@ -1234,19 +1180,12 @@ class EdgeConfig:
     min_gradient : float
         Pixels whose gradient, in grey levels (:func:`orientation_bins`), is below this are
         ignored (SPEC: 10; ≥ 0).
-    unsigned : bool
-        Orientations in [0, π) instead of [0, 2π): an edge counts the same whichever side is
-        brighter.
-    fa_hist : {"subtract", "counts"}
-        How q_FA removes the target histograms from the scene's (:func:`false_alarm_histogram`).
     """
 
     bins: int = 16
     sigma: float = 0.15
     samples: tuple[int, int] = (12, 24)
     min_gradient: float = 10.0
-    unsigned: bool = False
-    fa_hist: str = "subtract"
 
     def __post_init__(self) -> None:
         bins = _count("EdgeConfig", "bins", self.bins)
@@ -1260,10 +1199,6 @@ class EdgeConfig:
                 or not math.isfinite(gradient) or gradient < 0:
             raise TrackingError(f"EdgeConfig.min_gradient must be a non-negative finite number, got {gradient!r}")
         object.__setattr__(self, "min_gradient", float(gradient))
-        if not isinstance(self.unsigned, (bool, np.bool_)):
-            raise TrackingError(f"EdgeConfig.unsigned must be True or False, got {self.unsigned!r}")
-        object.__setattr__(self, "unsigned", bool(self.unsigned))
-        _choice("EdgeConfig", "fa_hist", self.fa_hist, FA_HISTOGRAMS)
 
     @property
     def n_bins(self) -> int:
@@ -1283,8 +1218,7 @@ class EdgeCue(ColourCue):
     out of that particle's decision.  A template of such a box is all zero too.
 
     q_FA subtracts the templates from the magnitude-weighted orientation histogram of the
-    whole frame; with ``fa_hist="counts"`` the amount of target j is the edge magnitude
-    within its box.  The ``foreground`` arguments of the template methods are ignored.
+    whole frame.  The ``foreground`` arguments of the template methods are ignored.
 
     Examples
     --------
@@ -1314,10 +1248,10 @@ class EdgeCue(ColourCue):
     config_type: ClassVar[type] = EdgeConfig
 
     def _image_features(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return orientation_bins(image, self.config.bins, self.config.unsigned, self.config.min_gradient)
+        return orientation_bins(image, self.config.bins, min_gradient=self.config.min_gradient)
 
     def _frame_features(self, obs: Observation) -> tuple[np.ndarray, np.ndarray]:
-        return obs.orientation_bins(self.config.bins, self.config.unsigned, self.config.min_gradient)
+        return obs.orientation_bins(self.config.bins, min_gradient=self.config.min_gradient)
 
 
 def _scene_counts(obs: Observation, bin_image: np.ndarray, weights: np.ndarray | None, n_bins: int) -> np.ndarray:
@@ -1333,37 +1267,12 @@ def _scene_counts(obs: Observation, bin_image: np.ndarray, weights: np.ndarray |
     return known[2]
 
 
-def _box_sums(weights: np.ndarray, centres: np.ndarray, sizes: np.ndarray) -> np.ndarray:
-    """The sum of ``weights`` over the pixels whose centres lie in each box, shape (τ,)."""
-    height, width = weights.shape
-    low = np.ceil(centres - sizes / 2.0 - 0.5)                  # first pixel i with i + ½ ≥ the box's edge
-    high = np.ceil(centres + sizes / 2.0 - 0.5)                 # one past the last
-    low = np.clip(low, 0, [width, height]).astype(np.intp)
-    high = np.clip(high, 0, [width, height]).astype(np.intp)
-    return np.array([weights[y0:y1, x0:x1].sum() for (x0, y0), (x1, y1) in zip(low, high)])
-
-
 def _particle_sizes(obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
     """Box sizes (w, h) of the particles, ``sizes[owner] * exp(log_scale)``, shape (P, 2)."""
     # A scale beyond e^±30 ≈ 10^±13 already covers or misses any image; clipping keeps exp
     # finite, so no sample coordinate becomes inf − inf = NaN.
     log_scale = np.clip(states[:, 4:5], -MAX_ABS_LOG_SCALE, MAX_ABS_LOG_SCALE)
     return obs.sizes[owner] * np.exp(log_scale)
-
-
-def _boxes(boxes, shape: tuple[int, int]) -> np.ndarray:
-    """Checked boxes (n, 4) ``x, y, w, h`` that overlap an image of ``shape`` (H, W)."""
-    boxes = np.asarray(boxes, dtype=np.float64)
-    if boxes.ndim != 2 or boxes.shape[1] != 4:
-        raise TrackingError(f"boxes must have shape (n, 4) (x, y, w, h), got {boxes.shape}")
-    if not np.isfinite(boxes).all() or (boxes[:, 2:] <= 0).any():
-        raise TrackingError("boxes must be finite with positive width and height")
-    height, width = shape
-    outside = (boxes[:, 0] >= width) | (boxes[:, 1] >= height) | (boxes[:, 0] + boxes[:, 2] <= 0) | \
-              (boxes[:, 1] + boxes[:, 3] <= 0)
-    if outside.any():
-        raise TrackingError(f"box {boxes[np.argmax(outside)].tolist()} lies outside the {width}×{height} image")
-    return boxes
 
 
 # -- registry -------------------------------------------------------------------------------------
@@ -1378,9 +1287,9 @@ def make_cue(name: str, **options) -> Cue:
     Examples
     --------
     >>> make_cue("location", sigma=5.0)
-    LocationCue(LocationConfig(sigma=5.0, fa_mode='centroid', gate=3.0, reference='previous'))
+    LocationCue(LocationConfig(sigma=5.0, gate=3.0, literal=False))
     >>> make_cue("edges", bins=8)
-    EdgeCue(EdgeConfig(bins=8, sigma=0.15, samples=(12, 24), min_gradient=10.0, unsigned=False, fa_hist='subtract'), targets=0)
+    EdgeCue(EdgeConfig(bins=8, sigma=0.15, samples=(12, 24), min_gradient=10.0), targets=0)
     >>> make_cue("sound")
     Traceback (most recent call last):
     ...

@@ -1,34 +1,31 @@
-"""Fusing the cues of every particle into a weight (SPEC Part D, W (7), W (20)–(21), W (32)).
+"""Fusing the cues of every particle with :mod:`belief` (SPEC Part D, W (7), W (20)–(21), W (32)).
 
 Each cue scores every particle against every hypothesis of the frame
 {θ_1, …, θ_τ, FA}.  The scores of one cue become a Bayesian mass function per particle
-(W (20)–(21), computed as a softmax of log-likelihoods so that tiny likelihoods never give
-0/0); the c cue mass functions of all particles are combined at once with a rule of the
-:mod:`belief` registry, as batches under the tracking model; the weight of a particle of
-target J is then Bel(θ_J) (W (32)), or Pls(θ_J) or BetP(θ_J) on request.
+(:func:`cue_masses`); the c cue mass functions of all particles are combined at once with a
+rule of the :mod:`belief` registry, as batches under the tracking model
+(``Model.for_targets``), and the weight of a particle of target J is Bel(θ_J) (W (32)), or
+Pls(θ_J) or BetP(θ_J), read with ``select=`` the particle's own target.
 
-For the rules and cue counts of :func:`plugins.video_tracking.owner_fusion.supports` (the
-R-weighted rule, DSmC, the conjunctive rule and Dempster's rule) those measures come from
-closed forms over the targets, at O(c·τ) per particle (plus one O(τ²) pass per particle for
-each R-weighted fold but the last) instead of the O(τ³) focal elements that a general
-combination of three cues builds; the fused mass functions are then combined only if
-:attr:`FusionResult.fused` is read.
+Everything goes through :mod:`belief`'s public API: for Bayesian sources
+:func:`belief.combine` uses its closed forms by itself (O(c·τ) per particle, plus one O(τ²)
+pass for each R-weighted fold but the last) instead of the O(τ³) focal elements that a
+general combination of three cues builds, and builds those only if someone asks.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
-from functools import cached_property, partial
+from functools import cached_property
 
 import numpy as np
 
-from belief import MassBatch, Model, combine
-from belief.errors import BeliefError, InvalidMassError
+from belief import MassBatch, Model, combine, inconsistency
+from belief.errors import BeliefError
 from belief.rules import EMPTY_MODES, R_MODES, get_rule
 from plugins.video_tracking import checks
 from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.owner_fusion import first_inconsistency, owner_measures, supports
 
 __all__ = ["FusionConfig", "CueFusion", "FusionResult", "cue_masses", "relative_likelihoods", "WEIGHTS", "MASSES"]
 
@@ -128,11 +125,11 @@ def cue_masses(log_likelihoods: np.ndarray, mode: str = "normalised") -> np.ndar
     """
     values = np.asarray(log_likelihoods, dtype=np.float64)
     if values.ndim != 2 or values.shape[1] < 2:
-        raise InvalidMassError(f"log-likelihoods must have shape (P, τ + 1), got {values.shape}")
+        raise TrackingError(f"log-likelihoods must have shape (P, τ + 1), got {values.shape}")
     if np.isnan(values).any() or np.isposinf(values).any():
-        raise InvalidMassError("log-likelihoods must not be NaN or +inf")
+        raise TrackingError("log-likelihoods must not be NaN or +inf")
     if mode not in _LIKELIHOOD_READINGS:
-        raise InvalidMassError(f"mode must be one of {', '.join(_LIKELIHOOD_READINGS)}, got {mode!r}")
+        raise TrackingError(f"mode must be one of {', '.join(_LIKELIHOOD_READINGS)}, got {mode!r}")
     top = values.max(axis=1, keepdims=True)
     dead = ~np.isfinite(top[:, 0])
     shifted = np.exp(values - np.where(dead[:, None], 0.0, top))
@@ -141,7 +138,7 @@ def cue_masses(log_likelihoods: np.ndarray, mode: str = "normalised") -> np.ndar
     if mode == "normalised":
         return normalised
     if (values > 0).any():
-        raise InvalidMassError("absolute cue masses need likelihoods in [0, 1] (log-likelihoods ≤ 0)")
+        raise TrackingError("absolute cue masses need likelihoods in [0, 1] (log-likelihoods ≤ 0)")
     likelihoods = np.exp(values)
     fits = likelihoods.sum(axis=1) <= 1.0
     likelihoods[:, -1] = 1.0 - likelihoods[:, :-1].sum(axis=1)
@@ -193,113 +190,73 @@ def relative_likelihoods(log_likelihoods: np.ndarray, owner: np.ndarray) -> np.n
 
 
 class FusionResult:
-    """The fused evidence of P particles.
+    """The fused evidence of P particles, read for each particle's own target.
+
+    Every measure is computed on first access (and kept), from the fused batch of
+    :func:`belief.combine`, whose closed forms share their work between the measures.
 
     Parameters
     ----------
-    fused : MassBatch or callable
-        The fused mass functions, or a function without arguments that combines them (then
-        :attr:`fused` is computed on first access only).
+    fused : MassBatch
+        One fused mass function per particle (P rows).
+    cues : sequence of MassBatch
+        The cue batches that were combined (R needs the first two).
     owner : ndarray of int, shape (P,)
-    weights : ndarray, shape (P,)
-    n_targets : int
-    measures : dict of str to ndarray, optional
-        Measures of θ_owner already known (keys ``bel``, ``pls``, ``betp``,
-        ``singleton_mass``, ``intersection_mass``, ``empty_mass``); the others are read off
-        :attr:`fused`.
-    inconsistency : callable, optional
-        Gives :attr:`inconsistency`; zeros by default.
+        The target of each particle.
+    targets : list of str
+        θ_1 … θ_τ.
+    config : FusionConfig
 
     Attributes
     ----------
-    owner : ndarray of int, shape (P,)
-        The target of each particle.
-    weights : ndarray, shape (P,)
-        The measure of θ_owner of each particle (not normalised).
-    n_targets : int
-        τ.
+    fused, owner : as given.
     """
 
-    def __init__(self, fused: MassBatch | Callable[[], MassBatch], owner: np.ndarray, weights: np.ndarray,
-                 n_targets: int = 0, *, measures: dict[str, np.ndarray] | None = None,
-                 inconsistency: Callable[[], np.ndarray] | None = None) -> None:
-        self._fused = fused
+    def __init__(self, fused: MassBatch, cues: Sequence[MassBatch], owner: np.ndarray, targets: list[str],
+                 config: "FusionConfig") -> None:
+        self.fused = fused
+        self.cues = tuple(cues)
         self.owner = owner
-        self.weights = weights
-        self.n_targets = n_targets
-        self._measures = {k: v for k, v in (measures or {}).items() if v is not None}
-        self._inconsistency = inconsistency
+        self._targets = targets
+        self._config = config
 
     @cached_property
-    def fused(self) -> MassBatch:
-        """One fused mass function per particle (P rows), combined on first access if needed."""
-        return self._fused if isinstance(self._fused, MassBatch) else self._fused()
-
-    def _known(self, name: str):
-        return self._measures.get(name)
+    def weights(self) -> np.ndarray:
+        """The measure of θ_J that weighs each particle (``config.weight``: Bel, Pls or BetP), shape (P,) (W (32))."""
+        if self._config.weight == "bel":
+            return self.bel
+        return getattr(self.fused, self._config.weight)(self._targets, select=self.owner)
 
     @cached_property
     def bel(self) -> np.ndarray:
-        """Bel(θ_J) of every particle for its own target J, shape (P,) (W (32))."""
-        known = self._known("bel")
-        if known is not None:
-            return known
-        targets = list(self.fused.frame.singletons[:self.n_targets])
-        return self.fused.bel(targets)[np.arange(len(self.owner)), self.owner] if len(self.owner) else np.zeros(0)
+        """Bel(θ_J) of every particle for its own target J, shape (P,) (W (8), W (35))."""
+        return self.fused.bel(self._targets, select=self.owner)
 
     @cached_property
     def singleton_mass(self) -> np.ndarray:
         """m(θ_J) of every particle for its own target J, shape (P,) (W (33))."""
-        known = self._known("singleton_mass")
-        return known if known is not None else _singleton_mass(self.fused, self.owner, self.n_targets)
+        return self.fused.mass(self._targets, select=self.owner)
 
     @cached_property
     def intersection_mass(self) -> np.ndarray:
-        """Mass on intersections of θ_J with other targets (θ_J ∩ θ_k …), per particle, shape (P,) (W (34))."""
-        known = self._known("intersection_mass")
-        return known if known is not None else _intersection_mass(self.fused, self.owner, self.n_targets)
+        """Mass on the elements inside θ_J other than θ_J itself (θ_J ∩ θ_k …), shape (P,) (W (34)).
+
+        Under the tracking model the non-empty elements inside θ_J are θ_J and the target
+        intersections that contain it, so this is Bel(θ_J) − m(θ_J).
+        """
+        return np.maximum(self.bel - self.singleton_mass, 0.0)
 
     @cached_property
     def empty_mass(self) -> np.ndarray:
-        """m(∅) of every particle (conflict kept by the rule), shape (P,)."""
-        known = self._known("empty_mass")
-        return known if known is not None else self.fused.empty_mass
+        """m(∅) of every particle (the conflict the rule keeps), shape (P,)."""
+        return self.fused.empty_mass
 
     @cached_property
     def inconsistency(self) -> np.ndarray:
-        """R (W (10)) of the first fold, between cues 1 and 2, per particle; zeros with one cue."""
-        return self._inconsistency() if self._inconsistency is not None else np.zeros(len(self.owner))
-
-
-def _singleton_mass(fused: MassBatch, owner: np.ndarray, n_targets: int) -> np.ndarray:
-    columns = _columns(fused, [fused.frame.singletons[j] for j in range(n_targets)])
-    return _pick(fused.values, columns, owner)
-
-
-def _intersection_mass(fused: MassBatch, owner: np.ndarray, n_targets: int) -> np.ndarray:
-    fa = len(fused.frame) - 1
-    totals = np.zeros((len(owner), n_targets))
-    for col, element in enumerate(fused.focal):
-        if len(element.terms) != 1:
-            continue
-        term = element.terms[0]
-        if term >> fa & 1 or term.bit_count() < 2:
-            continue
-        for j in range(n_targets):
-            if term >> j & 1:
-                totals[:, j] += fused.values[:, col]
-    return totals[np.arange(len(owner)), owner]
-
-
-def _columns(batch: MassBatch, elements) -> np.ndarray:
-    index = {e: i for i, e in enumerate(batch.focal)}
-    return np.array([index.get(e, -1) for e in elements], dtype=np.int64)
-
-
-def _pick(values: np.ndarray, columns: np.ndarray, owner: np.ndarray) -> np.ndarray:
-    padded = np.concatenate([values, np.zeros((values.shape[0], 1))], axis=1)
-    chosen = np.where(columns < 0, values.shape[1], columns)[owner]
-    return padded[np.arange(values.shape[0]), chosen]
+        """R of W (10) between the first two cues, per particle, shape (P,); zeros with one cue."""
+        if len(self.cues) < 2:
+            return np.zeros(len(self.owner))
+        return inconsistency(self.cues[0], self.cues[1], r_mode=self._config.r_mode)
 
 
 class CueFusion:
@@ -319,28 +276,24 @@ class CueFusion:
     >>> location = np.log([[0.6, 0.3, 0.1]])
     >>> colour = np.log([[0.2, 0.7, 0.1]])
     >>> result = fusion.fuse([location, colour], owner=np.array([0]))
-    >>> round(float(result.weights[0]), 4)            # Bel(θ1)
-    0.5149
+    >>> round(float(result.weights[0]), 4), round(float(result.inconsistency[0]), 4)      # Bel(θ1), R
+    (0.5149, 0.6325)
     """
 
-    def __init__(self, n_targets: int, config: FusionConfig = FusionConfig()) -> None:
-        if isinstance(n_targets, bool) or not isinstance(n_targets, int) or n_targets < 1:
-            raise InvalidMassError(f"the number of targets must be a positive integer, got {n_targets!r}")
-        self.n_targets = n_targets
-        self.config = config
-        self.model = Model.for_targets(n_targets)
-        self.focal = self.model.frame.singletons
-        self.targets = self.focal[:n_targets]
+    def __init__(self, n_targets: int, config: "FusionConfig" = None) -> None:
+        self.n_targets = checks.integer("the number of targets", n_targets, minimum=1)
+        self.config = config if config is not None else FusionConfig()
+        self.model = Model.for_targets(self.n_targets)
+        self.targets = [str(x) for x in self.model.frame.singletons[:self.n_targets]]
 
     def cue_masses(self, log_likelihoods: Sequence[np.ndarray], owner: np.ndarray) -> list[np.ndarray]:
         """The cue mass functions of P particles, one (P, τ + 1) array per cue (``config.masses``)."""
-        owner = np.asarray(owner, dtype=np.int64)
         shape = (owner.size, self.n_targets + 1)
         masses = []
         for k, scores in enumerate(log_likelihoods):
             scores = np.asarray(scores, dtype=np.float64)
             if scores.shape != shape:
-                raise InvalidMassError(f"cue {k + 1} gives shape {scores.shape}, expected {shape}")
+                raise TrackingError(f"cue {k + 1} gives shape {scores.shape}, expected {shape}")
             if self.config.masses == "relative":
                 masses.append(cue_masses(relative_likelihoods(scores, owner), "absolute"))
             else:
@@ -348,7 +301,7 @@ class CueFusion:
         return masses
 
     def fuse(self, log_likelihoods: Sequence[np.ndarray], owner: np.ndarray) -> FusionResult:
-        """Fuse c cues for P particles (W (7)) and weigh each particle (W (32)).
+        """Fuse c cues for P particles (W (7)); the result reads each particle's own target (W (32)).
 
         Parameters
         ----------
@@ -358,50 +311,11 @@ class CueFusion:
             The target index of each particle.
         """
         if not log_likelihoods:
-            raise InvalidMassError("fusion needs at least one cue")
+            raise TrackingError("fusion needs at least one cue")
         owner = np.asarray(owner, dtype=np.int64)
         if owner.size and (owner.min() < 0 or owner.max() >= self.n_targets):
-            raise InvalidMassError(f"particle owners must be target indices 0..{self.n_targets - 1}")
-        batches = [MassBatch._trusted(self.model, self.focal, values, canonical=True)
-                   for values in self.cue_masses(log_likelihoods, owner)]
-        masses = [b.values for b in batches]
-        config = self.config
-        weight = config.weight
-        rule = get_rule(config.rule).name
-        if len(masses) > 1:
-            def inconsistency() -> np.ndarray:
-                return first_inconsistency(masses[0], masses[1], config.r_mode)
-        else:
-            inconsistency = None
-        if not supports(rule, len(masses), config.r_mode, betp=weight == "betp"):
-            fused = self._combine(batches)
-            measure = getattr(fused, weight)(list(self.targets))                    # (P, τ)
-            weights = measure[np.arange(owner.size), owner] if owner.size else np.zeros(0)
-            return FusionResult(fused, owner, weights, self.n_targets, inconsistency=inconsistency)
-        # Closed forms per particle; rows they leave open are combined in general.
-        fast = owner_measures(masses, owner, rule, r_mode=config.r_mode, empty_mode=config.empty_mode,
-                              betp=weight == "betp")
-        measures = {"bel": fast.bel, "pls": fast.pls, "betp": fast.betp, "singleton_mass": fast.singleton,
-                    "intersection_mass": fast.intersection, "empty_mass": fast.empty}
-        if fast.general.any():
-            rows = np.flatnonzero(fast.general)
-            part = FusionResult(self._combine([MassBatch._trusted(self.model, self.focal, m[rows], canonical=True)
-                                               for m in masses]), owner[rows], None, self.n_targets)
-            targets = list(self.targets)
-            for name in list(measures):
-                if measures[name] is None:
-                    continue
-                if name in WEIGHTS:
-                    values = getattr(part.fused, name)(targets)[np.arange(rows.size), owner[rows]]
-                else:
-                    values = getattr(part, name)
-                measures[name] = measures[name].copy()
-                measures[name][rows] = values
-        return FusionResult(partial(self._combine, batches), owner, measures[weight], self.n_targets,
-                            measures=measures, inconsistency=inconsistency)
-
-    def _combine(self, batches: list[MassBatch]) -> MassBatch:
-        """The general combination of the cue batches with the configured rule (W (7))."""
-        if len(batches) == 1:
-            return batches[0]
-        return combine(*batches, rule=self.config.rule, **self.config.options)
+            raise TrackingError(f"particle owners must be target indices 0..{self.n_targets - 1}")
+        cues = [MassBatch.bayesian(m, model=self.model, validate=False)
+                for m in self.cue_masses(log_likelihoods, owner)]
+        fused = cues[0] if len(cues) == 1 else combine(*cues, rule=self.config.rule, **self.config.options)
+        return FusionResult(fused, cues, owner, self.targets, self.config)

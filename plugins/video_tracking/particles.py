@@ -106,7 +106,7 @@ def _real(name: str, value: object) -> float:
 def _non_negative(name: str, value: object) -> float:
     number = _real(name, value)
     if number < 0:
-        raise ValueError(f"{name} must be non-negative, got {value!r}")
+        raise TrackingError(f"{name} must be non-negative, got {value!r}")
     return number
 
 
@@ -114,9 +114,9 @@ def _count(name: str, value: object, minimum: int = 1) -> int:
     try:
         number = operator.index(value)  # type: ignore[arg-type]
     except TypeError:
-        raise ValueError(f"{name} must be an integer, got {value!r}") from None
+        raise TrackingError(f"{name} must be an integer, got {value!r}") from None
     if number < minimum:
-        raise ValueError(f"{name} must be at least {minimum}, got {number}")
+        raise TrackingError(f"{name} must be at least {minimum}, got {number}")
     return number
 
 
@@ -124,14 +124,14 @@ def _pair(name: str, value: object) -> tuple[float, float]:
     try:
         first, second = value  # type: ignore[misc]
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a pair of numbers, got {value!r}") from None
+        raise TrackingError(f"{name} must be a pair of numbers, got {value!r}") from None
     return _real(name, first), _real(name, second)
 
 
 def _states(states: object) -> np.ndarray:
     array = np.asarray(states, dtype=np.float64)
     if array.ndim != 2 or array.shape[1] != STATE_DIM or array.shape[0] == 0:
-        raise ValueError(f"states must have shape (N, {STATE_DIM}) with N >= 1, got shape {array.shape}")
+        raise TrackingError(f"states must have shape (N, {STATE_DIM}) with N >= 1, got shape {array.shape}")
     return array
 
 
@@ -152,7 +152,11 @@ def _warn_degenerate(what: str) -> None:
 
 @dataclass(frozen=True)
 class MotionConfig:
-    """Noise levels and time step of the constant-velocity model (SPEC B.1 defaults).
+    """Noise levels and time step of the constant-velocity model (W-S2).
+
+    The defaults are the tracker's, chosen on PETS 2009 S2.L1 (SPEC B.1 suggests 4 px and
+    1 px/frame): people there walk at about 1 px per frame.  The log-scale column gets no
+    noise: a window's size comes from the perspective model, not from the state.
 
     Parameters
     ----------
@@ -160,44 +164,40 @@ class MotionConfig:
         Standard deviation of the per-step noise on cx and cy, in pixels.
     sigma_vel : float
         Standard deviation of the per-step noise on vx and vy, in pixels per frame.
-    sigma_log_scale : float
-        Standard deviation of the per-step random walk of the log-scale; 0 keeps the
-        window size fixed.
     dt : float
         Time step in frames (must be positive).
 
     Raises
     ------
-    ValueError
+    TrackingError
         A field is not a finite number, a standard deviation is negative, or ``dt`` is
         not positive; the message names the field.
 
     Examples
     --------
     >>> MotionConfig()
-    MotionConfig(sigma_pos=4.0, sigma_vel=1.0, sigma_log_scale=0.02, dt=1.0)
+    MotionConfig(sigma_pos=3.0, sigma_vel=0.5, dt=1.0)
     >>> MotionConfig(sigma_pos=-1)
     Traceback (most recent call last):
     ...
-    ValueError: sigma_pos must be non-negative, got -1
+    plugins.video_tracking.errors.TrackingError: MotionConfig.sigma_pos must be non-negative, got -1
     """
 
-    sigma_pos: float = 4.0
-    sigma_vel: float = 1.0
-    sigma_log_scale: float = 0.02
+    sigma_pos: float = 3.0
+    sigma_vel: float = 0.5
     dt: float = 1.0
 
     def __post_init__(self) -> None:
-        for name in ("sigma_pos", "sigma_vel", "sigma_log_scale"):
-            object.__setattr__(self, name, _non_negative(name, getattr(self, name)))
-        dt = _real("dt", self.dt)
+        for name in ("sigma_pos", "sigma_vel"):
+            object.__setattr__(self, name, _non_negative(f"MotionConfig.{name}", getattr(self, name)))
+        dt = _real("MotionConfig.dt", self.dt)
         if dt <= 0:
-            raise ValueError(f"dt must be positive, got {self.dt!r}")
+            raise TrackingError(f"MotionConfig.dt must be positive, got {self.dt!r}")
         object.__setattr__(self, "dt", dt)
 
     def noise_std(self) -> np.ndarray:
-        """Per-column noise standard deviations, shape ``(5,)``, in :data:`STATE` order."""
-        return np.array([self.sigma_pos, self.sigma_pos, self.sigma_vel, self.sigma_vel, self.sigma_log_scale])
+        """Per-column noise standard deviations, shape ``(5,)``, in :data:`STATE` order (0 for the log-scale)."""
+        return np.array([self.sigma_pos, self.sigma_pos, self.sigma_vel, self.sigma_vel, 0.0])
 
 
 class MotionModel(Protocol):
@@ -235,10 +235,10 @@ class ConstantVelocity:
     Examples
     --------
     >>> rng = np.random.default_rng(0)
-    >>> still = ConstantVelocity(MotionConfig(sigma_pos=0, sigma_vel=0, sigma_log_scale=0))
+    >>> still = ConstantVelocity(MotionConfig(sigma_pos=0, sigma_vel=0))
     >>> still.propagate(np.array([[10.0, 20.0, 3.0, -1.0, 0.0]]), rng).tolist()
     [[13.0, 19.0, 3.0, -1.0, 0.0]]
-    >>> clipped = ConstantVelocity(MotionConfig(0, 0, 0), bounds=(64, 48))
+    >>> clipped = ConstantVelocity(MotionConfig(0, 0), bounds=(64, 48))
     >>> clipped.propagate(np.array([[60.0, 2.0, 10.0, -5.0, 0.0]]), rng).tolist()
     [[63.0, 0.0, 10.0, -5.0, 0.0]]
     """
@@ -248,11 +248,11 @@ class ConstantVelocity:
 
     def __post_init__(self) -> None:
         if not isinstance(self.config, MotionConfig):
-            raise ValueError(f"config must be a MotionConfig, got {type(self.config).__name__}")
+            raise TrackingError(f"config must be a MotionConfig, got {type(self.config).__name__}")
         if self.bounds is not None:
             width, height = _pair("bounds", self.bounds)
             if width < 1 or height < 1:
-                raise ValueError(f"bounds (width, height) must both be at least 1 pixel, got {self.bounds!r}")
+                raise TrackingError(f"bounds (width, height) must both be at least 1 pixel, got {self.bounds!r}")
             object.__setattr__(self, "bounds", (width, height))
 
     def propagate(self, states: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -371,7 +371,7 @@ def normalise_log_weights(log_weights: np.ndarray) -> np.ndarray:
     """
     log_weights = np.array(log_weights, dtype=np.float64)
     if log_weights.ndim != 1 or log_weights.size == 0:
-        raise ValueError(f"log_weights must be a non-empty 1-D array, got shape {log_weights.shape}")
+        raise TrackingError(f"log_weights must be a non-empty 1-D array, got shape {log_weights.shape}")
     # The maximum is NaN if any entry is, so one pass finds NaN and +inf.
     peak = float(log_weights.max())
     if math.isnan(peak) or peak == math.inf:
@@ -420,9 +420,9 @@ def _checked_weights(weights: np.ndarray) -> np.ndarray:
     """Validated weights divided by their sum; uniform (with a warning) if that sum is 0 or not finite."""
     weights = np.asarray(weights, dtype=np.float64)
     if weights.ndim != 1 or weights.size == 0:
-        raise ValueError(f"weights must be a non-empty 1-D array, got shape {weights.shape}")
+        raise TrackingError(f"weights must be a non-empty 1-D array, got shape {weights.shape}")
     if (weights < 0).any():
-        raise ValueError(f"weights must be non-negative, got minimum {weights.min()!r}")
+        raise TrackingError(f"weights must be non-negative, got minimum {weights.min()!r}")
     # Without negative entries the maximum is finite exactly when every entry is (NaN propagates).
     peak = weights.max()
     if not math.isfinite(peak):
@@ -483,7 +483,7 @@ def multinomial(weights: np.ndarray, rng: np.random.Generator, n: Optional[int] 
 
     Raises
     ------
-    ValueError
+    TrackingError
         ``weights`` is not a non-empty 1-D array, has a negative entry, or ``n < 1``.
 
     Examples
@@ -574,7 +574,7 @@ def get_resampler(name: str) -> Callable[..., np.ndarray]:
 
     Raises
     ------
-    ValueError
+    TrackingError
         For an unknown name; the message lists the known ones.
 
     Examples
@@ -584,13 +584,13 @@ def get_resampler(name: str) -> Callable[..., np.ndarray]:
     >>> get_resampler("bootstrap")
     Traceback (most recent call last):
     ...
-    ValueError: unknown resampler 'bootstrap'; known: multinomial, residual, stratified, systematic
+    plugins.video_tracking.errors.TrackingError: unknown resampler 'bootstrap'; known: multinomial, residual, stratified, systematic
     """
     try:
         return RESAMPLERS[name]
     except (KeyError, TypeError):
         known = ", ".join(sorted(RESAMPLERS))
-        raise ValueError(f"unknown resampler {name!r}; known: {known}") from None
+        raise TrackingError(f"unknown resampler {name!r}; known: {known}") from None
 
 
 def adaptive_count(kappa: float, n_min: int, n_max: int) -> int:
@@ -622,10 +622,10 @@ def adaptive_count(kappa: float, n_min: int, n_max: int) -> int:
     n_min = _count("n_min", n_min)
     n_max = _count("n_max", n_max)
     if n_max < n_min:
-        raise ValueError(f"n_max must be at least n_min, got n_min={n_min}, n_max={n_max}")
+        raise TrackingError(f"n_max must be at least n_min, got n_min={n_min}, n_max={n_max}")
     tolerance = 1e-9
     if not -tolerance <= kappa <= 1 + tolerance:
-        raise ValueError(f"kappa must lie in [0, 1], got {kappa!r}")
+        raise TrackingError(f"kappa must lie in [0, 1], got {kappa!r}")
     kappa = min(max(kappa, 0.0), 1.0)
     # A product within rounding of an integer counts as that integer, so κ's last bit cannot add a particle.
     extra = math.ceil((n_max - n_min) * kappa - tolerance)
@@ -653,7 +653,7 @@ class ParticleSet:
 
     Raises
     ------
-    ValueError
+    TrackingError
         Wrong shapes, or a non-finite state.
 
     Examples
@@ -674,13 +674,13 @@ class ParticleSet:
     def __post_init__(self) -> None:
         states = np.array(_states(self.states), dtype=np.float64)  # always a private copy
         if not np.isfinite(states).all():
-            raise ValueError("states must be finite")
+            raise TrackingError("states must be finite")
         if self.log_weights is None:
             log_weights = _uniform_log_weights(states.shape[0])
         else:
             log_weights = np.asarray(self.log_weights, dtype=np.float64)
             if log_weights.shape != (states.shape[0],):
-                raise ValueError(
+                raise TrackingError(
                     f"log_weights must have shape ({states.shape[0]},) to match states, got {log_weights.shape}"
                 )
             log_weights = normalise_log_weights(log_weights)
@@ -730,7 +730,33 @@ class ParticleSet:
 
     def propagate(self, motion: MotionModel, rng: np.random.Generator) -> ParticleSet:
         """The set moved one step by ``motion`` (W-S2), weights unchanged."""
-        return ParticleSet(motion.propagate(self.states, rng), self.log_weights)
+        states = np.asarray(motion.propagate(self.states, rng), dtype=np.float64)
+        if states.shape != self.states.shape or not np.isfinite(states).all():
+            raise TrackingError(f"the motion model must return finite states of shape {self.states.shape}")
+        # The weights are this set's own normalised array, so the new set can share them.
+        return ParticleSet._from_checked(states, self.log_weights)
+
+    def with_column(self, column: int, values) -> ParticleSet:
+        """The set with one state column replaced, weights unchanged.
+
+        Parameters
+        ----------
+        column : int
+            A column of :data:`STATE`, e.g. :data:`LOG_SCALE`.
+        values : float or array_like, shape (N,)
+            Finite new values.
+
+        Examples
+        --------
+        >>> particles = ParticleSet(np.zeros((2, 5))).with_column(LOG_SCALE, [0.5, -0.5])
+        >>> particles.states[:, LOG_SCALE].tolist(), particles.ess()
+        ([0.5, -0.5], 2.0)
+        """
+        states = self.states.copy()
+        states[:, column] = values
+        if not np.isfinite(states[:, column]).all():
+            raise TrackingError(f"the new values of state column {column} must be finite")
+        return ParticleSet._from_checked(states, self.log_weights)
 
     def reweight(self, log_likelihood: np.ndarray) -> ParticleSet:
         """The set with log π⁽ⁿ⁾ + log p(z_t | s⁽ⁿ⁾), renormalised (C (5)).
@@ -744,7 +770,7 @@ class ParticleSet:
         """
         log_likelihood = np.asarray(log_likelihood, dtype=np.float64)
         if log_likelihood.shape != self.log_weights.shape:
-            raise ValueError(f"log_likelihood must have shape {self.log_weights.shape}, got {log_likelihood.shape}")
+            raise TrackingError(f"log_likelihood must have shape {self.log_weights.shape}, got {log_likelihood.shape}")
         # The states are this set's own read-only array, so the new set can share them.
         return ParticleSet._from_checked(self.states, normalise_log_weights(self.log_weights + log_likelihood))
 
@@ -756,7 +782,7 @@ class ParticleSet:
         """
         indices = np.asarray(indices)
         if indices.ndim != 1 or indices.size == 0 or not np.issubdtype(indices.dtype, np.integer):
-            raise ValueError(f"indices must be a non-empty 1-D integer array, got {indices.dtype} {indices.shape}")
+            raise TrackingError(f"indices must be a non-empty 1-D integer array, got {indices.dtype} {indices.shape}")
         # Indexing copies the (finite) states; the weights of a resampled set are uniform.
         return ParticleSet._from_checked(self.states[indices], _uniform_log_weights(indices.size))
 
@@ -803,7 +829,7 @@ class ParticleSet:
         resampler = get_resampler(method)
         threshold = _real("threshold", threshold)
         if not 0.0 <= threshold <= 1.0:
-            raise ValueError(f"threshold must lie in [0, 1], got {threshold!r}")
+            raise TrackingError(f"threshold must lie in [0, 1], got {threshold!r}")
         size = _resample_size(n, len(self))
         if size == len(self) and threshold < 1.0 and not self.ess() < threshold * len(self):
             return self

@@ -309,18 +309,17 @@ class Tracker:
         moved = []
         for target in self.targets:
             particles = target.particles.propagate(self._motion, self.rng)
-            states = particles.states.copy()
             # Without a fitted model every target keeps its birth size: a random walk on the
             # scale would drift, since the foreground-masked colour rewards shrinking windows.
-            states[:, LOG_SCALE] = 0.0 if target.growing or perspective is None else \
-                perspective.log_scale(states[:, CY], target.birth_cy)
-            moved.append(ParticleSet(states, particles.log_weights))
+            scale = 0.0 if target.growing or perspective is None else \
+                perspective.log_scale(particles.states[:, CY], target.birth_cy)
+            moved.append(particles.with_column(LOG_SCALE, scale))
         return moved
 
     def _location_centres(self) -> np.ndarray:
         """The t − 1 centres, moved on by their velocities if the location cue asks so, shape (τ, 2)."""
         centres = np.array([t.estimate[[CX, CY]] for t in self.targets])
-        if self.config.location.reference == "predicted":
+        if not self.config.location.literal:
             centres = centres + self.config.motion.dt * np.array([t.estimate[[VX, VY]] for t in self.targets])
         return centres
 

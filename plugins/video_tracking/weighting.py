@@ -152,10 +152,10 @@ class BeliefWeighting:
     Bel(θ1) = .5149.
 
     >>> weighting = BeliefWeighting(FusionConfig(masses="normalised"))
-    >>> scores = (np.log([[0.6, 0.3, 0.1]]), np.log([[0.2, 0.7, 0.1]]))
-    >>> weighing = weighting.weigh(Evidence(scores, np.array([0]), np.zeros((1, 2))))
-    >>> round(float(np.exp(weighing.log_weights[0])), 4), round(float(weighing.diagnostics["mean_bel"][0]), 4)
-    (0.5149, 0.5149)
+    >>> scores = (np.log([[0.6, 0.3, 0.1]] * 2), np.log([[0.2, 0.7, 0.1]] * 2))
+    >>> weighing = weighting.weigh(Evidence(scores, np.array([0, 1]), np.zeros((2, 2))))
+    >>> np.exp(weighing.log_weights).round(4), weighing.diagnostics["mean_bel"].round(4)
+    (array([0.5149, 0.6609]), array([0.5149, 0.6609]))
     """
 
     columns = BELIEF_COLUMNS

@@ -85,7 +85,7 @@ def location_obs(previous):
 def test_location_matches_the_formulas_by_hand():
     obs = location_obs([[90, 45], [150, 75], [120, 60]])
     states = states_at([110, 60], [100, 50], [300, 10])
-    scores = LocationCue(LocationConfig(sigma=10.0)).log_likelihoods(obs, states, np.array([0, 0, 1]))
+    scores = LocationCue(LocationConfig(sigma=10.0, literal=True)).log_likelihoods(obs, states, np.array([0, 0, 1]))
     d_max = math.hypot(30, 15)                                 # the particle (90, 45) is farthest from (120, 60)
     expected = [
         [-(10 ** 2 + 10 ** 2) / 200, -(30 ** 2 + 10 ** 2) / 200, -(d_max - 10) ** 2 / 200],
@@ -95,12 +95,14 @@ def test_location_matches_the_formulas_by_hand():
     np.testing.assert_allclose(scores, expected, rtol=1e-12)
 
 
-def test_location_nearest_mode_measures_from_the_nearest_target():
+def test_the_gated_location_measures_from_the_nearest_target_up_to_the_gate():
+    # The previous particles do not matter: d_max = gate · σ = 30 px.
     obs = location_obs([[90, 45], [150, 75], [120, 60]])
-    scores = LocationCue(LocationConfig(sigma=10.0, fa_mode="nearest")).log_likelihoods(
-        obs, states_at([110, 60]), np.array([1]))
-    d_max = math.hypot(20, 10)                                 # (120, 60) lies √500 from both targets
-    assert scores[0, 2] == pytest.approx(-(d_max - math.hypot(10, 10)) ** 2 / 200, rel=1e-12)
+    scores = LocationCue(LocationConfig(sigma=10.0)).log_likelihoods(
+        obs, states_at([110, 60], [100, 50], [100, 95]), np.array([1, 0, 0]))
+    assert scores[0, 2] == pytest.approx(-(30 - math.hypot(10, 10)) ** 2 / 200, rel=1e-12)
+    assert scores[1, 2] == pytest.approx(-30 ** 2 / 200)      # on target 1: as far from FA as can be
+    assert scores[2, 2] == 0.0                                 # 45 px from target 1, beyond the gate
     assert scores[0, 0] == pytest.approx(-1.0) and scores[0, 1] == pytest.approx(-5.0)
 
 
@@ -110,7 +112,7 @@ def test_location_fa_grows_away_from_the_centroid_and_is_clamped_outside_d_max()
     radii = np.linspace(0, d_max + 60, 200)
     direction = np.array([0.6, -0.8])
     states = states_at(*(np.array([120.0, 60.0]) + radii[:, None] * direction))
-    fa = LocationCue().log_likelihoods(obs, states, np.zeros(len(radii), dtype=int))[:, 2]
+    fa = LocationCue(LocationConfig(literal=True)).log_likelihoods(obs, states, np.zeros(len(radii), dtype=int))[:, 2]
     inside = radii < d_max
     assert np.all(np.diff(fa[inside]) > 0)                    # strictly more FA-like going out
     assert np.all(fa[~inside] == 0.0)                          # max(d_max − d, 0) = 0: no fall-back
@@ -119,7 +121,8 @@ def test_location_fa_grows_away_from_the_centroid_and_is_clamped_outside_d_max()
 
 def test_location_d_max_is_floored_at_sigma():
     obs = location_obs([[120, 60]])                            # every old particle at the centroid: d_max = 0
-    fa = LocationCue(LocationConfig(sigma=10.0)).log_likelihoods(obs, states_at([120, 60], [124, 63]), np.array([0, 0]))
+    fa = LocationCue(LocationConfig(sigma=10.0, literal=True)).log_likelihoods(obs, states_at([120, 60], [124, 63]),
+                                                                             np.array([0, 0]))
     np.testing.assert_allclose(fa[:, 2], [-100 / 200, -25 / 200])
 
 
@@ -193,10 +196,9 @@ def test_colour_bins_cut_each_channel_evenly():
     np.testing.assert_array_equal(colour_bins(np.ascontiguousarray(image), 8)[0], np.repeat(np.arange(8), 32) * 64)
 
 
-@pytest.mark.parametrize("mode", ["subtract", "counts"])
-def test_false_alarm_histogram_excludes_the_target_colours(mode):
+def test_false_alarm_histogram_excludes_the_target_colours():
     image, boxes = scene_with_targets()
-    cue = ColourCue(ColourConfig(fa_hist=mode))
+    cue = ColourCue(ColourConfig())
     cue.set_templates(image, boxes)
     q_fa = cue.false_alarm_histogram(observation(image, boxes))
     red, blue, grey = (colour_bins(np.array([[c]], np.uint8), 8)[0, 0] for c in (RED, BLUE, GREY))
@@ -209,16 +211,14 @@ def test_false_alarm_histogram_excludes_the_target_colours(mode):
     assert scores[1, 2] == pytest.approx(-1 / (2 * 0.15 ** 2))
 
 
-def test_false_alarm_histogram_keeps_the_target_colour_left_in_the_background():
-    # A red patch elsewhere in the scene: "counts" keeps it in FA, "subtract" removes red entirely.
+def test_false_alarm_histogram_removes_a_target_colour_everywhere():
+    # A red patch elsewhere in the scene: W (18) subtracts the red template, so red leaves FA entirely.
     image, boxes = scene_with_targets()
     image[85:95, 5:25] = RED
     red = colour_bins(np.array([[RED]], np.uint8), 8)[0, 0]
-    obs = observation(image, boxes)
-    for mode, expected_red in (("subtract", 0.0), ("counts", 200 / (image.shape[0] * image.shape[1] - 1600))):
-        cue = ColourCue(ColourConfig(fa_hist=mode))
-        cue.set_templates(image, boxes)
-        assert cue.false_alarm_histogram(obs)[red] == pytest.approx(expected_red)
+    cue = ColourCue(ColourConfig())
+    cue.set_templates(image, boxes)
+    assert cue.false_alarm_histogram(observation(image, boxes))[red] == 0.0
 
 
 def test_false_alarm_histogram_is_uniform_when_the_targets_fill_the_scene():
@@ -236,9 +236,8 @@ def test_false_alarm_histogram_ignores_rounding_residue():
     template /= template.sum()
     scene = template * 997.0 * (1 + 1e-15)
     assert (scene / scene.sum() - template > 0).any()
-    for mode in ("subtract", "counts"):
-        q_fa = cues.false_alarm_histogram(scene, template[None, :], np.array([997.0]), mode)
-        np.testing.assert_allclose(q_fa, np.full(6, 1 / 6))
+    q_fa = cues.false_alarm_histogram(scene, template[None, :])
+    np.testing.assert_allclose(q_fa, np.full(6, 1 / 6))
 
 
 def test_targets_are_added_and_removed_in_order():
@@ -390,21 +389,20 @@ def test_registry_builds_every_cue():
     assert isinstance(make_cue("colour"), AppearanceCue) and not isinstance(make_cue("location"), AppearanceCue)
     with pytest.raises(UnknownCueError, match="known cues: colour, location, foreground, edges"):
         make_cue("sound")
-    with pytest.raises(TrackingError, match="no option bins; its options are sigma, fa_mode"):
+    with pytest.raises(TrackingError, match="no option bins; its options are sigma, gate, literal"):
         make_cue("location", bins=3)
 
 
 @pytest.mark.parametrize("build, message", [
     (lambda: LocationConfig(sigma=0), "sigma must be a positive"),
     (lambda: LocationConfig(sigma=float("nan")), "sigma must be a positive"),
-    (lambda: LocationConfig(fa_mode="middle"), "fa_mode must be one of centroid, nearest"),
+    (lambda: LocationConfig(literal="yes"), "LocationConfig.literal must be True or False"),
     (lambda: ColourConfig(bins=0), "bins must be a positive integer"),
     (lambda: ColourConfig(bins=32), "bins must be at most 16"),
     (lambda: ColourConfig(bins=8.0), "bins must be a positive integer"),
     (lambda: ColourConfig(sigma=-0.1), "sigma must be a positive"),
     (lambda: ColourConfig(samples=(12,)), "samples must be a pair"),
     (lambda: ColourConfig(samples=(0, 5)), "samples must be a positive integer"),
-    (lambda: ColourConfig(fa_hist="divide"), "fa_hist must be one of subtract, counts"),
     (lambda: LocationCue(ColourConfig()), "needs a LocationConfig"),
     (lambda: BackgroundConfig(history=0), "history must be a positive integer"),
     (lambda: BackgroundConfig(var_threshold=-1), "var_threshold must be a positive"),
@@ -434,9 +432,9 @@ def test_bad_inputs_raise_clear_errors():
         Observation(image.astype(float), None, obs.centres, obs.sizes, np.zeros((0, 2)))
     with pytest.raises(TrackingError, match="mask > 0"):
         Observation(image, np.zeros(image.shape[:2], np.uint8), obs.centres, obs.sizes, np.zeros((0, 2)))
-    with pytest.raises(TrackingError, match="lies outside the 140×100 image"):
+    with pytest.raises(TrackingError, match="lies outside the 140x100 image"):
         cue.add_target(image, [150, 10, 5, 5])
-    with pytest.raises(TrackingError, match="positive width and height"):
+    with pytest.raises(TrackingError, match="both must be positive"):
         cue.add_target(image, [10, 10, 0, 5])
 
 

@@ -149,7 +149,8 @@ def test_the_orientation_images_of_a_frame_are_computed_once_per_setting(monkeyp
     calls = []
     real = cues_module.orientation_bins
     monkeypatch.setattr(cues_module, "orientation_bins",
-                        lambda image, *args: calls.append(args) or real(image, *args))
+                        lambda image, *args, **kwargs: calls.append(args + tuple(kwargs.values()))
+                        or real(image, *args, **kwargs))
     image, boxes = target_scene()
     obs = observe(image, boxes)
     first = obs.orientation_bins(16, False, 10.0)
@@ -269,20 +270,6 @@ def test_the_false_alarm_histogram_is_the_magnitude_weighted_scene_without_the_t
                                                                 np.array([0, 0])), q_fa[None, :])[:, 0])
 
 
-def test_counts_false_alarm_removes_the_edge_weight_inside_each_target_box():
-    image, boxes = target_scene()
-    cue = EdgeCue(EdgeConfig(samples=(10, 15), fa_hist="counts"))
-    cue.set_templates(image, boxes)
-    obs = observe(image, boxes)
-    bins, weights = orientation_bins(image)
-    scene = np.bincount(bins.ravel(), weights.ravel(), minlength=16)
-    inside = weights[30:60, 40:60].sum()                                     # the box (40, 30, 20, 30)
-    assert 0 < inside < weights.sum()
-    expected = false_alarm_histogram(scene, cue.templates, np.array([inside]), "counts")
-    assert np.allclose(cue.false_alarm_histogram(obs), expected, rtol=0, atol=1e-15)
-    assert not np.allclose(expected, false_alarm_histogram(scene, cue.templates, np.array([600.0]), "counts"))
-
-
 def test_a_frame_without_edges_gives_a_uniform_false_alarm_and_finite_scores():
     image = grey_image(np.full((40, 50), 77))
     cue = EdgeCue(EdgeConfig(samples=(6, 12)))
@@ -291,19 +278,6 @@ def test_a_frame_without_edges_gives_a_uniform_false_alarm_and_finite_scores():
     obs = observe(image, [[10, 10, 10, 20]])
     assert np.array_equal(cue.false_alarm_histogram(obs), np.full(16, 1 / 16))
     assert np.allclose(cue.log_likelihoods(obs, particles((15, 20), (30, 20)), np.array([0, 0])), FLAT)
-
-
-def test_unsigned_edges_ignore_which_side_is_brighter():
-    rising = step_image(height=40, width=40, column=20, left=20, right=200)   # θ = 0
-    falling = step_image(height=40, width=40, column=20, left=200, right=20)  # θ = π
-    box = [[10, 5, 20, 30]]
-    scores = {}
-    for unsigned in (False, True):
-        cue = EdgeCue(EdgeConfig(samples=(20, 30), unsigned=unsigned))
-        cue.set_templates(rising, box)
-        scores[unsigned] = cue.log_likelihoods(observe(falling, box), particles((20, 20)), np.array([0]))[0, 0]
-    assert abs(scores[True]) < 1e-12
-    assert np.isclose(scores[False], FLAT, rtol=0, atol=1e-12)                # bins 0 and 8: ρ = 0
 
 
 def test_histograms_built_block_by_block_equal_the_whole_batch():
@@ -335,11 +309,11 @@ def test_histograms_built_block_by_block_equal_the_whole_batch():
 # -- registry and settings -----------------------------------------------------------------------
 def test_the_registry_builds_the_edge_cue():
     assert CUES["edges"] is EdgeCue
-    cue = make_cue("edges", bins=8, unsigned=True, min_gradient=4)
+    cue = make_cue("edges", bins=8, min_gradient=4)
     assert isinstance(cue, EdgeCue) and isinstance(cue, AppearanceCue) and cue.name == "edges"
-    assert cue.config == EdgeConfig(bins=8, unsigned=True, min_gradient=4.0)
+    assert cue.config == EdgeConfig(bins=8, min_gradient=4.0)
     assert cue.templates.shape == (0, 8)
-    assert make_cue("edges").config == EdgeConfig(16, 0.15, (12, 24), 10.0, False, "subtract")
+    assert make_cue("edges").config == EdgeConfig(16, 0.15, (12, 24), 10.0)
     with pytest.raises(TrackingError, match="no option fa_mode; its options are bins, sigma, samples, min_gradient"):
         make_cue("edges", fa_mode="gate")
 
@@ -355,9 +329,6 @@ def test_the_registry_builds_the_edge_cue():
     (lambda: EdgeConfig(min_gradient=-1), "EdgeConfig.min_gradient must be a non-negative"),
     (lambda: EdgeConfig(min_gradient=float("nan")), "EdgeConfig.min_gradient must be a non-negative"),
     (lambda: EdgeConfig(min_gradient="10"), "EdgeConfig.min_gradient must be a non-negative"),
-    (lambda: EdgeConfig(unsigned="yes"), "EdgeConfig.unsigned must be True or False"),
-    (lambda: EdgeConfig(unsigned=1), "EdgeConfig.unsigned must be True or False"),
-    (lambda: EdgeConfig(fa_hist="nearest"), "EdgeConfig.fa_hist must be one of subtract, counts"),
     (lambda: EdgeCue(ColourConfig()), "EdgeCue needs an EdgeConfig, got ColourConfig"),
     (lambda: ColourCue(EdgeConfig()), "ColourCue needs a ColourConfig, got EdgeConfig"),
 ])

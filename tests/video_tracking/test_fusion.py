@@ -5,7 +5,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from belief import InvalidMassError
 from plugins.video_tracking.errors import TrackingError
 from plugins.video_tracking.fusion import CueFusion, FusionConfig, cue_masses
 
@@ -30,7 +29,7 @@ def test_cue_masses_survive_underflow_and_zero_rows():
 
 @pytest.mark.parametrize("bad", [np.array([[np.nan, 0.0]]), np.array([[np.inf, 0.0]]), np.zeros((3,))])
 def test_cue_masses_reject_bad_input(bad):
-    with pytest.raises(InvalidMassError):
+    with pytest.raises(TrackingError):
         cue_masses(bad)
 
 
@@ -84,8 +83,9 @@ def test_rules_agree_with_combining_rows_one_by_one():
     masses = [bayesian_rows(rng, 5, 4) for _ in range(3)]
     owner = np.array([0, 1, 2, 0, 1])
     result = fusion.fuse([np.log(m) for m in masses], owner)
+    names = list(fusion.model.frame.hypotheses)
     for row in range(5):
-        singles = [MassFunction(dict(zip(fusion.focal, m[row])), model=fusion.model) for m in masses]
+        singles = [MassFunction(dict(zip(names, m[row])), model=fusion.model) for m in masses]
         fused = combine(*singles, rule="pcr6")
         assert result.weights[row] == pytest.approx(fused.betp(fusion.targets[owner[row]]), abs=1e-12)
 
@@ -103,10 +103,10 @@ def test_configuration_errors_are_specific():
         FusionConfig(weight="mean")
     with pytest.raises(TrackingError, match="FusionConfig.r_mode must be one of paper, euclid, jousselme"):
         FusionConfig(r_mode="manhattan")
-    with pytest.raises(InvalidMassError):
+    with pytest.raises(TrackingError, match="number of targets"):
         CueFusion(0)
     fusion = CueFusion(2, FusionConfig(masses="normalised"))
-    with pytest.raises(InvalidMassError, match="shape"):
+    with pytest.raises(TrackingError, match="shape"):
         fusion.fuse([np.zeros((3, 4))], owner=np.zeros(3, dtype=int))
-    with pytest.raises(InvalidMassError, match="owners"):
+    with pytest.raises(TrackingError, match="owners"):
         fusion.fuse([np.zeros((2, 3))], owner=np.array([0, 2]))

@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from plugins.video_tracking.errors import TrackingError
 from plugins.video_tracking.particles import (
     CX,
     CY,
@@ -69,22 +70,23 @@ def test_state_columns():
 # -- configuration --------------------------------------------------------------------------------
 
 
-def test_motion_config_defaults_follow_the_spec():
+def test_motion_config_defaults_are_the_trackers():
     config = MotionConfig()
-    assert (config.sigma_pos, config.sigma_vel, config.sigma_log_scale, config.dt) == (4.0, 1.0, 0.02, 1.0)
+    assert (config.sigma_pos, config.sigma_vel, config.dt) == (3.0, 0.5, 1.0)
+    assert config.noise_std().tolist() == [3.0, 3.0, 0.5, 0.5, 0.0]          # no noise on the log-scale
 
 
-@pytest.mark.parametrize("field", ["sigma_pos", "sigma_vel", "sigma_log_scale", "dt"])
+@pytest.mark.parametrize("field", ["sigma_pos", "sigma_vel", "dt"])
 @pytest.mark.parametrize("value", [-1.0, math.nan, math.inf, -math.inf, "four", None])
 def test_bad_motion_config_names_the_field(field, value):
-    with pytest.raises(ValueError, match=field):
+    with pytest.raises(TrackingError, match=f"MotionConfig.{field}"):
         MotionConfig(**{field: value})
 
 
 def test_dt_must_be_positive_but_noise_may_be_zero():
-    with pytest.raises(ValueError, match="dt"):
+    with pytest.raises(TrackingError, match="dt"):
         MotionConfig(dt=0)
-    assert MotionConfig(sigma_pos=0, sigma_vel=0, sigma_log_scale=0).sigma_pos == 0.0
+    assert MotionConfig(sigma_pos=0, sigma_vel=0).sigma_pos == 0.0
 
 
 def test_motion_config_is_frozen():
@@ -110,7 +112,7 @@ def test_bad_bounds_raise(bounds):
     dt=st.floats(0.1, 5),
 )
 def test_zero_noise_is_exact_constant_velocity(cx, cy, vx, vy, log_scale, dt):
-    model = ConstantVelocity(MotionConfig(sigma_pos=0, sigma_vel=0, sigma_log_scale=0, dt=dt))
+    model = ConstantVelocity(MotionConfig(sigma_pos=0, sigma_vel=0, dt=dt))
     states = np.array([[cx, cy, vx, vy, log_scale]] * 3)
     moved = model.propagate(states, np.random.default_rng(0))
     expected = np.array([cx + vx * dt, cy + vy * dt, vx, vy, log_scale])
@@ -127,17 +129,18 @@ def test_propagate_returns_a_new_array_and_leaves_the_input_alone():
 
 
 def test_noise_standard_deviations_match_the_config():
-    config = MotionConfig(sigma_pos=3.0, sigma_vel=0.5, sigma_log_scale=0.05, dt=2.0)
+    config = MotionConfig(sigma_pos=3.0, sigma_vel=0.5, dt=2.0)
     states = np.zeros((200_000, STATE_DIM))
     states[:, VX] = 1.5  # the drift must shift the mean, not widen the spread
     moved = ConstantVelocity(config).propagate(states, np.random.default_rng(2024))
     noise = moved - states
     noise[:, CX] -= 1.5 * config.dt
-    expected_std = [3.0, 3.0, 0.5, 0.5, 0.05]
-    np.testing.assert_allclose(noise.std(axis=0), expected_std, rtol=0.02)
-    assert np.all(np.abs(noise.mean(axis=0)) < 0.05 * np.array(expected_std))
-    correlations = np.corrcoef(noise, rowvar=False)
-    np.testing.assert_allclose(correlations, np.eye(STATE_DIM), atol=0.02)
+    expected_std = [3.0, 3.0, 0.5, 0.5]
+    np.testing.assert_allclose(noise[:, :4].std(axis=0), expected_std, rtol=0.02)
+    assert np.all(np.abs(noise[:, :4].mean(axis=0)) < 0.05 * np.array(expected_std))
+    assert np.array_equal(noise[:, 4], np.zeros(len(states)))                       # the log-scale stays
+    correlations = np.corrcoef(noise[:, :4], rowvar=False)
+    np.testing.assert_allclose(correlations, np.eye(4), atol=0.02)
 
 
 def test_propagation_is_reproducible_from_the_seed():

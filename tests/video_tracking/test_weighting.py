@@ -7,7 +7,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from belief.errors import InvalidMassError
 from plugins.video_tracking.cues import LocationConfig, LocationCue, Observation
 from plugins.video_tracking.errors import TrackingError
 from plugins.video_tracking.fusion import CueFusion, FusionConfig, cue_masses, relative_likelihoods
@@ -32,9 +31,9 @@ def test_absolute_masses_sum_to_one_and_keep_likelihoods_that_fit(rows):
 
 
 def test_absolute_masses_reject_likelihoods_above_one_and_unknown_modes():
-    with pytest.raises(InvalidMassError, match=r"\[0, 1\]"):
+    with pytest.raises(TrackingError, match=r"\[0, 1\]"):
         cue_masses(np.array([[0.5, -1.0]]), "absolute")
-    with pytest.raises(InvalidMassError, match="normalised, absolute"):
+    with pytest.raises(TrackingError, match="normalised, absolute"):
         cue_masses(np.array([[0.0, -1.0]]), "odd")
     with pytest.raises(TrackingError, match="FusionConfig.masses must be one of relative, normalised"):
         FusionConfig(masses="absolute")
@@ -73,27 +72,28 @@ def test_relative_masses_give_weights_that_follow_the_fit_where_normalised_masse
 def test_gate_location_makes_false_alarm_unlikely_near_every_target_only():
     obs = Observation(np.zeros((200, 400, 3), np.uint8), None, centres=[[50.0, 100.0], [350.0, 100.0]],
                       sizes=[[20.0, 40.0], [20.0, 40.0]], previous_particles=np.zeros((0, 2)))
-    cue = LocationCue(LocationConfig(sigma=10.0, fa_mode="gate", gate=3.0))
+    cue = LocationCue(LocationConfig(sigma=10.0, gate=3.0))
     states = np.array([[50.0, 100.0, 0, 0, 0], [350.0, 100.0, 0, 0, 0], [200.0, 100.0, 0, 0, 0]])
     logs = cue.log_likelihoods(obs, states, np.array([0, 1, 0]))
     assert logs[0, 2] == pytest.approx(-4.5) and logs[1, 2] == pytest.approx(-4.5)   # G(3σ; σ) at each target
     assert logs[2, 2] == 0.0                                                          # beyond the gate: FA
-    centroid = LocationCue(LocationConfig(sigma=10.0)).log_likelihoods(obs, states, np.array([0, 1, 0]))
+    centroid = LocationCue(LocationConfig(sigma=10.0, literal=True)).log_likelihoods(obs, states,
+                                                                                   np.array([0, 1, 0]))
     assert centroid[0, 2] == 0.0          # W (23) with the centroid calls a lone outer target FA
-    with pytest.raises(TrackingError, match="reference"):
-        LocationConfig(reference="ahead")
+    with pytest.raises(TrackingError, match="literal"):
+        LocationConfig(literal="ahead")
     with pytest.raises(TrackingError, match="gate"):
         LocationConfig(gate=0.0)
 
 
 def test_predicted_reference_centres_the_location_cue_ahead_of_a_moving_target():
     image = np.zeros((100, 200, 3), np.uint8)
-    config = TrackerConfig(particles=5, cues=("location",), location=LocationConfig(reference="predicted"))
+    config = TrackerConfig(particles=5, cues=("location",))
     tracker = Tracker(config, init_from_boxes([(40, 30, 10, 20)]), np.random.default_rng(0))
     tracker.step(1, image)
     tracker.targets[0].estimate[2:4] = (4.0, -2.0)
     assert np.allclose(tracker._location_centres(), [[49.0, 38.0]])
-    literal = Tracker(TrackerConfig(particles=5, cues=("location",), location=LocationConfig()),
+    literal = Tracker(TrackerConfig(particles=5, cues=("location",), location=LocationConfig(literal=True)),
                       init_from_boxes([(40, 30, 10, 20)]), np.random.default_rng(0))
     literal.step(1, image)
     literal.targets[0].estimate[2:4] = (4.0, -2.0)
