@@ -19,7 +19,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from plugins.video_tracking.adaptive import AdaptiveConfig, occluded, total_similarity, update_templates
+from plugins.video_tracking.adaptive import AdaptiveConfig, occluded, total_similarity
 from plugins.video_tracking.cues import AppearanceCue, Observation
 
 __all__ = ["AppearanceFollower", "row_similarity"]
@@ -107,9 +107,6 @@ class AppearanceFollower:
             flags = occluded(similarity, self.config.threshold)
             if self.update:
                 for p, k in zip(current, self._columns):
-                    cue = self.cues[k]
-                    updated = update_templates(cue.initial_templates, cue.templates, p, flags)
-                    for j in range(tau):
-                        cue.replace_template(j, updated[j])
+                    self.cues[k].follow_appearance(p, flags)
         self._similarity = {int(i): float(s) for i, s in zip(ids, similarity)}
         return similarity, flags

@@ -26,7 +26,7 @@ Appearance cues hold one template per target.  A tracker sets them all at once w
 ``set_templates`` or lets targets be born and die with ``add_target`` / ``remove_target``;
 target j of every call to ``log_likelihoods`` is row j of the templates, so the tracker
 keeps its targets and the cue's templates in the same order.  A template update (SPEC B.5,
-C (16)) reads ``templates`` and ``initial_templates`` and writes with ``replace_template``.
+C (16)) is the cue's own :meth:`ColourCue.follow_appearance`.
 """
 
 from __future__ import annotations
@@ -247,6 +247,10 @@ class AppearanceCue(Cue, Protocol):
 
     def replace_template(self, index: int, histogram) -> None:
         """Replace the current template of target ``index`` (normalised to sum 1)."""
+        ...
+
+    def follow_appearance(self, observed: np.ndarray, frozen: np.ndarray) -> None:
+        """Let every template follow its target's appearance ``observed`` (C (16)), except the ``frozen`` ones."""
         ...
 
     def rebuild_template(self, index: int, image: np.ndarray, box, foreground: np.ndarray | None = None) -> None:
@@ -1005,6 +1009,35 @@ class ColourCue:
         self._templates[index] = template[0]
         self._initial = self._initial.copy()
         self._initial[index] = template[0]
+
+    def follow_appearance(self, observed: np.ndarray, frozen: np.ndarray) -> None:
+        """Let every template follow its target's current appearance, frozen under occlusion (C (16)).
+
+        Parameters
+        ----------
+        observed : ndarray, shape (τ, B)
+            Each target's histogram at its estimate, p_i(x̂_t) (:meth:`histograms`).
+        frozen : ndarray of bool, shape (τ,)
+            Targets whose templates stay as they are (occluded: ρ_t < T).
+
+        See :func:`plugins.video_tracking.adaptive.update_templates` for the formula; the
+        initial templates anchor it.
+
+        Examples
+        --------
+        >>> cue = ColourCue(ColourConfig(bins=1))
+        >>> cue.set_templates(np.zeros((4, 4, 3), np.uint8), np.array([[0, 0, 4, 4]]))
+        >>> cue.follow_appearance(np.array([[0.5]]), np.array([False]))
+        >>> cue.templates.tolist()
+        [[1.0]]
+        """
+        from plugins.video_tracking.adaptive import update_templates
+
+        updated = update_templates(self._initial, self._templates, observed, frozen)
+        totals = updated.sum(axis=1, keepdims=True)
+        # Rows summing to 1 up to rounding are normalised once more, as every template is.
+        self._templates = np.divide(updated, totals, out=updated, where=totals > 0)
+        self._shared = False                                # a new array: no snapshot of it was handed out
 
     def replace_template(self, index: int, histogram) -> None:
         """Make ``histogram``, normalised to sum 1, the current template of target ``index``.

@@ -42,7 +42,7 @@ from plugins.video_tracking.background import BackgroundModel
 from plugins.video_tracking.config import TrackerConfig
 from plugins.video_tracking.cues import CUES, Observation
 from plugins.video_tracking.errors import InitError, TrackingError
-from plugins.video_tracking.initiation import InitPlan, init_from_gt  # noqa: F401  (benchmark scripts)
+from plugins.video_tracking.initiation import InitPlan
 from plugins.video_tracking.particles import CX, CY, LOG_SCALE, VX, VY, ConstantVelocity, ParticleSet, adaptive_count
 from plugins.video_tracking.tracks import Estimate, TrackManager
 from plugins.video_tracking.weighting import BELIEF_COLUMNS, Evidence, Weighing, make_weighting
