@@ -298,6 +298,9 @@ def _build_plan(rule: str, batches: Sequence[MassBatch], model: Model, options: 
 # -- shared pieces ------------------------------------------------------------------------------------
 _TINY = np.finfo(np.float64).smallest_subnormal
 
+#: Pair weights above this have a finite 1 / (x_i + x_l) whose products with masses stay finite.
+_RECIPROCAL_FLOOR = 1e-150
+
 
 def _ratio(numerator: np.ndarray, denominator: np.ndarray) -> np.ndarray:
     """numerator / denominator where the denominator is positive, else 0 (never NaN)."""
@@ -865,12 +868,19 @@ class _Fold:
         if not complete:
             lost = ~(both > 0)
             both[lost] = 1.0                                # w = w_F = 0 there: their shares are 0
-        self.inverse = np.reciprocal(both, out=both)        # 1 / (w_i + w_F)
-        self.to_target = self.w * self.inverse
+        if bool((both > _RECIPROCAL_FLOOR).all()):
+            inverse = np.reciprocal(both, out=both)         # 1 / (w_i + w_F), one division for both shares
+            self.to_target = self.w * inverse
+            self.to_f = self.w_f * inverse
+        else:
+            # Weights of 1e-300 and below (masses whose products underflow): the shares, at most
+            # 1, are formed directly, where 1 / (w_i + w_F) would overflow.
+            self.to_target = self.w / both
+            self.to_f = self.w_f / both
         if not state.no_v:
             # θ_S ∪ F against θ_l: θ_l gets p_l w_l/(w_F + w_l), θ_S ∪ F keeps Σ_l p_l w_F/(w_F + w_l).
             self.to_l = p * self.to_target
-            self.stays = self.w_f * _dot(p, self.inverse)
+            self.stays = _dot(p, self.to_f)
         self.to_union = None
         self.fallback = None
         if not complete:
@@ -939,7 +949,7 @@ class _Fold:
 
     def _f_share(self) -> np.ndarray:
         """Σ_i k_iF w_F / (w_i + w_F): F's part of the conflicts θ_i / F (with SPEC A.4's fallback)."""
-        out = self.w_f * _dot(self.k_f, self.inverse)
+        out = _dot(self.k_f, self.to_f)
         if self.fallback is not None:
             np.add.at(out, *self.fallback)
         return out
@@ -1074,7 +1084,7 @@ class _Fold:
         # w_J (s_J Σ_l p_l h_l + p_J Σ_l s_l h_l) with h_l = 1 / (w_J + w_l), l ≠ J; by support
         # where m0 gives neither any weight.
         both = w_j + self.w
-        if both.all():
+        if bool((both > _RECIPROCAL_FLOOR).all()):
             h = np.reciprocal(both, out=both)
             h.reshape(-1)[flat] = 0.0
             to_single = w_j * (s_j * _dot(p, h) + p_j * _dot(s, h))
@@ -1135,25 +1145,32 @@ class _Fold:
         to_single += w_j
         return {"s": to_single, "u": u_new, "qj": qj, "vj": vj}
 
-    def _union_pairs(self, rows: np.ndarray) -> np.ndarray:
-        """G_ij = 1 / (u_j + σ_i) for the targets i without m0 weight and j ≠ i, else 0; (|O|, |O|, R)."""
+    def _union_pairs(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """D_ij = σ_i + u_j and the mask of the pairs it counts (targets i without m0 weight, j ≠ i); (|O|, |O|, R)."""
         u, sigma, zero_w = self.state.u[:, rows], self.sigma[:, rows], self.zero_w[:, rows]
-        g = _ratio(np.ones((u.shape[0], u.shape[0], rows.size)), sigma[:, None] + u[None])
-        g *= zero_w[:, None]
+        denominator = sigma[:, None] + u[None]
+        counted = np.broadcast_to(zero_w[:, None], denominator.shape).copy()
         diagonal = np.arange(u.shape[0])
-        g[diagonal, diagonal] = 0.0
-        return g
+        counted[diagonal, diagonal] = False
+        return denominator, counted
 
     def _target_fallback(self, rows: np.ndarray) -> np.ndarray:
-        """θ_i's share of the pairs θ_j ∪ F / θ_i without m0 weight: p_i σ_i Σ_j u_j / (u_j + σ_i)."""
-        g = self._union_pairs(rows)
-        return self.p[:, rows] * self.sigma[:, rows] * np.einsum("ijn,jn->in", g, self.state.u[:, rows])
+        """θ_i's share of the pairs θ_j ∪ F / θ_i without m0 weight: p_i Σ_j u_j σ_i / (u_j + σ_i).
+
+        The ratio σ_i / (u_j + σ_i) ≤ 1 is formed first, so tiny supports cannot overflow it.
+        """
+        denominator, counted = self._union_pairs(rows)
+        shares = _share(np.broadcast_to(self.sigma[:, rows][:, None], denominator.shape), denominator)
+        shares *= counted
+        return self.p[:, rows] * np.einsum("ijn,jn->in", shares, self.state.u[:, rows])
 
     def _union_fallback(self, rows: np.ndarray) -> np.ndarray:
-        """θ_j ∪ F's share of the same pairs: u_j² Σ_i p_i / (u_j + σ_i)."""
-        g = self._union_pairs(rows)
+        """θ_j ∪ F's share of the same pairs: u_j Σ_i p_i u_j / (u_j + σ_i), the ratio formed first."""
+        denominator, counted = self._union_pairs(rows)
         u = self.state.u[:, rows]
-        return u * u * np.einsum("ijn,in->jn", g, self.p[:, rows])
+        shares = _share(np.broadcast_to(u[None], denominator.shape), denominator)
+        shares *= counted
+        return u * np.einsum("ijn,in->jn", shares, self.p[:, rows])
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -1183,23 +1200,24 @@ def _pair_shares(s: np.ndarray, p: np.ndarray, w: np.ndarray, sigma: np.ndarray)
 def _share_products(weights: np.ndarray, s: np.ndarray, p: np.ndarray, members: np.ndarray | None) -> np.ndarray:
     """s_i Σ_l p_l M_il + p_i Σ_l s_l M_il with M_il = x_i / (x_i + x_l) over members i ≠ l (0 if x_i + x_l = 0).
 
-    Blocks of rows whose weights are all positive use H_il = 1 / (x_i + x_l), so that the
-    sum is x_i (s_i (H p)_i + p_i (H s)_i) less the diagonal's s_i p_i (no 0/0 can occur
-    there); the others mask the pairs without weight.  A block's (|O|, |O|, rows) matrix
-    fits in cache.
+    Blocks of rows whose weights are all above :data:`_RECIPROCAL_FLOOR` use
+    H_il = 1 / (x_i + x_l), so that the sum is x_i (s_i (H p)_i + p_i (H s)_i) less the
+    diagonal's s_i p_i (no 0/0 can occur there, and 1 / (x_i + x_l) stays finite); the others
+    form the ratio x_i / (x_i + x_l) first, which is at most 1 whatever the weights (masses of
+    1e-300 and below, from likelihoods that underflow, cannot overflow it), and mask the pairs
+    without weight.  A block's (|O|, |O|, rows) matrix fits in cache.
     """
     o, n = s.shape
     out = np.empty((o, n))
     block = max(64, PAIR_BLOCK_ENTRIES // max(o * o, 1))
     diagonal = np.arange(o)
-    every = members is None and bool(weights.all())
-    positive = None if every or members is not None else (weights > 0).all(axis=0)
+    safe = None if members is not None else (weights > _RECIPROCAL_FLOOR).all(axis=0)
     for start in range(0, n, block):
         rows = slice(start, min(n, start + block))
         x = weights[:, rows] if members is None else np.where(members[:, rows], weights[:, rows], 0.0)
         matrix = np.add(x[:, None], x[None])
         sr, pr = s[:, rows], p[:, rows]
-        if every or (positive is not None and positive[rows].all()):
+        if safe is not None and safe[rows].all():
             np.reciprocal(matrix, out=matrix)
             result = sr * np.einsum("iln,ln->in", matrix, pr)
             result += pr * np.einsum("iln,ln->in", matrix, sr)

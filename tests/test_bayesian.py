@@ -73,6 +73,18 @@ def sparse(rng, rows, n):
     return m / m.sum(axis=1, keepdims=True)
 
 
+def tiny(rng, rows, n):
+    """Masses down to 1e-320 beside ordinary ones: products of two or three underflow or turn subnormal.
+
+    Such masses come from likelihoods that underflow (a particle far from every target), and
+    no closed form may divide by them or by a sum of them.
+    """
+    m = rng.dirichlet(np.ones(n), size=rows)
+    small = rng.random(m.shape) < 0.5
+    m[small] = 10.0 ** rng.uniform(-320, -150, size=int(small.sum()))
+    return m / m.sum(axis=1, keepdims=True)
+
+
 def near_conflict(rng, rows, model, sources):
     """Sources that (almost) never agree: 1 − ε on an exclusive hypothesis against 1 − ε on the others.
 
@@ -189,7 +201,7 @@ def check(model, rule, options, arrays, broadcast, rng, shuffle=False):
 
 
 @st.composite
-def cases(draw, kinds=("dense", "sparse", "conflict")):
+def cases(draw, kinds=("dense", "sparse", "conflict", "tiny")):
     name, model = draw(st.sampled_from(MODELS))
     rule, options = draw(st.sampled_from(RULE_OPTIONS))
     sources = draw(st.integers(2, 4))
@@ -214,10 +226,11 @@ def arrays_of(rng, model, sources, rows, kind):
     n = len(model.frame)
     if kind == "conflict" and exclusive_split(model).exclusive:
         return near_conflict(rng, rows, model, sources)
-    maker = sparse if kind != "dense" else dense
+    maker = {"dense": dense, "tiny": tiny}.get(kind, sparse)
     return [maker(rng, rows, n) for _ in range(sources)]
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning")
 @settings(max_examples=300, deadline=None)
 @given(case=cases())
 def test_closed_forms_equal_the_general_combination(case):
@@ -254,6 +267,20 @@ def test_every_rule_on_every_model(name, model, rule, options):
     for sources in (2, 3, 4):
         for maker in (dense, sparse):
             check(model, rule, options, [maker(rng, 6, len(model.frame)) for _ in range(sources)], sources == 3, rng)
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+@pytest.mark.parametrize("rule, options", RULE_OPTIONS,
+                         ids=[f"{r}-{o.get('r_mode', '')}-{o.get('empty_mode', '')}" for r, o in RULE_OPTIONS])
+def test_masses_that_underflow_in_products(rule, options):
+    # Cue masses of 1e-160 and below (likelihoods that underflow): pair weights of 1e-320 must
+    # neither overflow a reciprocal nor turn into NaN, and both paths agree.
+    rng = np.random.default_rng(RULE_OPTIONS.index((rule, options)))
+    for tau in (2, 5, 9):
+        model = Model.for_targets(tau)
+        for sources in (2, 3):
+            arrays = [tiny(rng, 40, tau + 1) for _ in range(sources)]
+            check(model, rule, options, arrays, False, rng)
 
 
 def test_the_conflict_strategy_reaches_total_conflict():
