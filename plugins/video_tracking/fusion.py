@@ -15,6 +15,7 @@ general combination of three cues builds, and builds those only if someone asks.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -126,23 +127,32 @@ def cue_masses(log_likelihoods: np.ndarray, mode: str = "normalised") -> np.ndar
     values = np.asarray(log_likelihoods, dtype=np.float64)
     if values.ndim != 2 or values.shape[1] < 2:
         raise TrackingError(f"log-likelihoods must have shape (P, τ + 1), got {values.shape}")
-    if np.isnan(values).any() or np.isposinf(values).any():
-        raise TrackingError("log-likelihoods must not be NaN or +inf")
     if mode not in _LIKELIHOOD_READINGS:
         raise TrackingError(f"mode must be one of {', '.join(_LIKELIHOOD_READINGS)}, got {mode!r}")
-    top = values.max(axis=1, keepdims=True)
-    dead = ~np.isfinite(top[:, 0])
-    shifted = np.exp(values - np.where(dead[:, None], 0.0, top))
-    shifted[dead] = 1.0
-    normalised = shifted / shifted.sum(axis=1, keepdims=True)
+    peak = float(values.max()) if values.size else 0.0           # NaN if any entry is
+    if math.isnan(peak) or peak == math.inf:
+        raise TrackingError("log-likelihoods must not be NaN or +inf")
     if mode == "normalised":
-        return normalised
-    if (values > 0).any():
+        return _softmax(values)
+    if peak > 0:
         raise TrackingError("absolute cue masses need likelihoods in [0, 1] (log-likelihoods ≤ 0)")
     likelihoods = np.exp(values)
     fits = likelihoods.sum(axis=1) <= 1.0
     likelihoods[:, -1] = 1.0 - likelihoods[:, :-1].sum(axis=1)
-    return np.where(fits[:, None], likelihoods, normalised)
+    if not fits.all():
+        # Rows whose likelihoods sum past one are normalised as W (20)–(21) (row by row, so
+        # computing them apart gives the same numbers).
+        likelihoods[~fits] = _softmax(values[~fits])
+    return likelihoods
+
+
+def _softmax(values: np.ndarray) -> np.ndarray:
+    """W (20)–(21) row by row from log-likelihoods: exp(v − max) normalised; a row of −inf is uniform."""
+    top = values.max(axis=1, keepdims=True)
+    dead = ~np.isfinite(top[:, 0])
+    shifted = np.exp(values - np.where(dead[:, None], 0.0, top))
+    shifted[dead] = 1.0
+    return shifted / shifted.sum(axis=1, keepdims=True)
 
 
 def relative_likelihoods(log_likelihoods: np.ndarray, owner: np.ndarray) -> np.ndarray:
