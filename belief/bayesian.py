@@ -255,7 +255,6 @@ def _build_plan(rule: str, batches: Sequence[MassBatch], model: Model, options: 
     if split is None:
         return None, (f"the {model.kind} model is outside the class of the closed forms (exclusive hypotheses, "
                       "each disjoint from every other, plus hypotheses that are free among themselves)")
-    n = split.size
     layouts = []
     for k, b in enumerate(batches, start=1):
         layout = _layout(b.focal_key)

@@ -15,7 +15,7 @@ from collections.abc import Iterable, Mapping
 from functools import lru_cache
 from typing import Any, Union
 
-from belief.errors import FormatError, FrameError, ModelError
+from belief.errors import FormatError, ModelError
 from belief.frame import Element, Frame, reduce_terms
 
 __all__ = ["Model"]

@@ -19,7 +19,6 @@ stricter model for the fusion (see :meth:`belief.model.Model.is_refined_by`).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache

@@ -4,7 +4,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from belief import Element, FormatError, Frame, Model, ModelError, UnknownHypothesisError
+from belief import FormatError, Frame, Model, ModelError, UnknownHypothesisError
 from tests.strategies import (
     ModelCase,
     any_model_cases,

@@ -87,13 +87,12 @@ import json
 import os
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass, fields, is_dataclass
+from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from belief.errors import BeliefError
 from plugins.video_tracking.errors import TrackingError
 
 __all__ = [
@@ -178,7 +177,6 @@ class SequenceSpec:
 
     def load(self) -> tuple[Any, np.ndarray]:
         """The frames to track (a rendered scene or a video path) and the ground-truth rows."""
-        from plugins.video_tracking import scenes
         from plugins.video_tracking.motfiles import read_mot
 
         if self.scene is not None:
