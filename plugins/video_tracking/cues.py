@@ -1013,15 +1013,15 @@ class ColourCue:
     def follow_appearance(self, observed: np.ndarray, frozen: np.ndarray) -> None:
         """Let every template follow its target's current appearance, frozen under occlusion (C (16)).
 
+        The formula is :func:`plugins.video_tracking.adaptive.update_templates`; the initial
+        templates anchor it.
+
         Parameters
         ----------
         observed : ndarray, shape (τ, B)
             Each target's histogram at its estimate, p_i(x̂_t) (:meth:`histograms`).
         frozen : ndarray of bool, shape (τ,)
             Targets whose templates stay as they are (occluded: ρ_t < T).
-
-        See :func:`plugins.video_tracking.adaptive.update_templates` for the formula; the
-        initial templates anchor it.
 
         Examples
         --------

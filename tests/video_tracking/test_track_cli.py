@@ -26,22 +26,6 @@ def track(argv: list[str]) -> int:
     return args.func(args)
 
 
-def test_demo_writes_all_outputs(tmp_path, capsys):
-    out = tmp_path / "demo"
-    assert track(["--demo", "--out", str(out), "--seed", "2", "--particles", "30", "--no-progress"]) == 0
-    assert {p.name for p in out.iterdir()} == OUTPUTS
-    printed = capsys.readouterr().out
-    assert "MOTA" in printed and "IDF1" in printed and "ID switches" in printed
-    summary = json.loads((out / "summary.json").read_text())
-    assert summary["frames"] == 100 and summary["seed"] == 2 and summary["parameters"]["particles"] == 30
-    assert summary["parameters"]["cues"] == ["colour", "location", "foreground"]
-    assert summary["scores"]["mota"] is not None and summary["version"]
-    tracks = np.loadtxt(out / "tracks.txt", delimiter=",")
-    assert tracks.shape == (400, 10) and np.isfinite(tracks).all()
-    diagnostics = np.genfromtxt(out / "diagnostics.csv", delimiter=",", names=True)
-    assert len(diagnostics) == 4 * 99 and np.isfinite(diagnostics["mean_bel"]).all()
-
-
 def write_video(path: Path, n_frames: int = 4) -> Path:
     frames = np.full((n_frames, 48, 64, 3), 100, np.uint8)
     frames[:, 10:30, 20:30] = (40, 40, 190)
@@ -120,15 +104,25 @@ def test_pets_first_frames(tmp_path):
     assert all(np.isfinite(diagnostics[name]).all() for name in diagnostics.dtype.names)
 
 
-def test_readme_main_command_runs_the_tracking_demo(tmp_path, capsys):
+def test_readme_main_command_runs_the_tracking_demo_and_writes_every_output(tmp_path, capsys):
     readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
     command = next(line for line in readme.splitlines() if line.startswith("pip install . && belief "))
     argv = command.split("&& belief ", 1)[1].split()
     assert argv[:2] == ["track", "--demo"]
     out = tmp_path / "readme_run"
     argv[argv.index("--out") + 1] = str(out)
-    assert track([*argv[1:], "--particles", "20", "--no-progress"]) == 0
+    assert track([*argv[1:], "--particles", "30", "--seed", "2", "--no-progress"]) == 0
     assert {p.name for p in out.iterdir()} == OUTPUTS
+    printed = capsys.readouterr().out
+    assert "MOTA" in printed and "IDF1" in printed and "ID switches" in printed
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["frames"] == 100 and summary["seed"] == 2 and summary["parameters"]["particles"] == 30
+    assert summary["parameters"]["cues"] == ["colour", "location", "foreground"]
+    assert summary["scores"]["mota"] is not None and summary["version"]
+    tracks = np.loadtxt(out / "tracks.txt", delimiter=",")
+    assert tracks.shape == (400, 10) and np.isfinite(tracks).all()
+    diagnostics = np.genfromtxt(out / "diagnostics.csv", delimiter=",", names=True)
+    assert len(diagnostics) == 4 * 99 and np.isfinite(diagnostics["mean_bel"]).all()
 
 
 def test_a_video_without_init_file_is_tracked_automatically(tmp_path, capsys):
@@ -138,7 +132,7 @@ def test_a_video_without_init_file_is_tracked_automatically(tmp_path, capsys):
     gt = tmp_path / "gt.txt"
     scenes.write_gt(gt, scene.ground_truth)
     out = tmp_path / "auto"
-    assert track([str(video), "--out", str(out), "--gt", str(gt), "--particles", "30", "--no-video",
+    assert track([str(video), "--out", str(out), "--gt", str(gt), "--particles", "20", "--no-video",
                   "--no-progress"]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["init"] == "automatic initiation" and summary["parameters"]["warm_up"] == 50
@@ -148,9 +142,15 @@ def test_a_video_without_init_file_is_tracked_automatically(tmp_path, capsys):
 
 
 def test_fusion_strategy_edges_and_adaptive_particles_from_the_command_line(tmp_path):
+    scene = scenes.render(scenes.crossing(0))
+    video = tmp_path / "crossing.avi"
+    scenes.write_video(video, scene.frames[:20])
+    gt = tmp_path / "gt.txt"
+    scenes.write_gt(gt, scene.ground_truth[scene.ground_truth[:, 0] <= 20])
     out = tmp_path / "adaptive"
-    assert track(["--demo", "--out", str(out), "--particles", "20", "--fusion", "adaptive", "--adaptive-particles",
-                  "--cues", "colour,location,edges", "--no-video", "--no-progress"]) == 0
+    assert track([str(video), "--init-from-gt", str(gt), "--out", str(out), "--particles", "20", "--fusion",
+                  "adaptive", "--adaptive-particles", "--cues", "colour,location,edges", "--no-video",
+                  "--no-progress"]) == 0
     summary = json.loads((out / "summary.json").read_text())
     parameters = summary["parameters"]
     assert parameters["fusion"] == "adaptive" and parameters["adaptive_particles"] is True
