@@ -1318,6 +1318,25 @@ def bayesian_inconsistency(m1: np.ndarray, m2: np.ndarray, split: ExclusiveSplit
     >>> [float(bayesian_inconsistency(a, b, split, mode)[0].round(4)) for mode in ("paper", "euclid")]
     [0.6325, 0.4]
     """
+    def jousselme(delta: np.ndarray) -> np.ndarray:
+        free = delta[:, split.o_index]
+        squares = (free * free).sum(axis=1)
+        free_sum = free.sum(axis=1)
+        excl = delta[:, split.e_index]
+        # (Σ Δ)² − Σ Δ² is exactly 0 when a single free hypothesis differs, so sources on two
+        # disjoint singletons give exactly R = 1, as the general path does.
+        return 0.5 * ((excl * excl).sum(axis=1) + squares + (free_sum * free_sum - squares) / 3.0)
+
+    return aligned_inconsistency(m1, m2, r_mode, jousselme)
+
+
+def aligned_inconsistency(m1: np.ndarray, m2: np.ndarray, r_mode: str,
+                          jousselme: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    """R of W (10) between rows of two arrays aligned on the same focal elements, shape (N,).
+
+    ``jousselme(delta)`` returns ½ ΔᵀDΔ for the rows of ``delta = m1 − m2``; it is called only
+    when ``r_mode == "jousselme"``, so each caller supplies the form its columns allow.
+    """
     delta = m1 - m2
     if r_mode == "paper":
         value = np.abs(delta).sum(axis=1) / 2.0
@@ -1325,13 +1344,7 @@ def bayesian_inconsistency(m1: np.ndarray, m2: np.ndarray, split: ExclusiveSplit
     elif r_mode == "euclid":
         value = 0.5 * (delta * delta).sum(axis=1)
     else:
-        free = delta[:, split.o_index]
-        squares = (free * free).sum(axis=1)
-        free_sum = free.sum(axis=1)
-        excl = delta[:, split.e_index]
-        # (Σ Δ)² − Σ Δ² is exactly 0 when a single free hypothesis differs, so sources on two
-        # disjoint singletons give exactly R = 1, as the general path does.
-        value = 0.5 * ((excl * excl).sum(axis=1) + squares + (free_sum * free_sum - squares) / 3.0)
+        value = jousselme(delta)
     return np.sqrt(np.clip(value, 0.0, 1.0))
 
 

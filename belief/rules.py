@@ -820,16 +820,11 @@ def inconsistency(first, second, *aligned, r_mode: str = "paper") -> np.ndarray:
 def _aligned_inconsistency(m1: np.ndarray, m2: np.ndarray, focal: Sequence[Element], model: Model,
                            r_mode: str = "paper") -> np.ndarray:
     """R of W (10) between rows of two arrays aligned on ``focal``, shape (N,)."""
-    delta = m1 - m2
-    if r_mode == "paper":
-        value = np.abs(delta).sum(axis=1) / 2.0
-        value[~(np.minimum(m1, m2) > 0).any(axis=1)] = 1.0
-    elif r_mode == "euclid":
-        value = 0.5 * (delta * delta).sum(axis=1)
-    else:
+    def jousselme(delta: np.ndarray) -> np.ndarray:
         matrix = _jousselme_matrix(model, tuple(focal))
-        value = 0.5 * np.einsum("na,ab,nb->n", delta, matrix, delta)
-    return np.sqrt(np.clip(value, 0.0, 1.0))
+        return 0.5 * np.einsum("na,ab,nb->n", delta, matrix, delta)
+
+    return bayesian.aligned_inconsistency(m1, m2, r_mode, jousselme)
 
 
 @lru_cache(maxsize=256)

@@ -411,7 +411,7 @@ def render_page(experiment, result, summary: dict, sequences: list[str], methods
         "",
         "## Set-up",
         "",
-        f"- **Sequences.** PETS 2009 S2.L1, frames 1–200 (real video, up to 8 people), and four synthetic scenes "
+        "- **Sequences.** PETS 2009 S2.L1, frames 1–200 (real video, up to 8 people), and four synthetic scenes "
         "of `plugins.video_tracking.scenes`: `crossing` (two people cross, one fully hidden for 7 frames), "
         "`occlusion` (the `partial_occlusion` scene: a person half hidden by another, one behind a pillar), "
         "`illumination` (a global brightening, then a shadow) and `scale` (`scale_change`: people walking "

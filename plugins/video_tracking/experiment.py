@@ -8,24 +8,11 @@ combination is a :class:`Cell`: one tracking run, scored against the ground trut
 runs the cells in parallel on local processes or a Dask cluster, resumably, and writes the
 tables (``belief experiment CONFIG`` on the command line).
 
-The outputs, in ``OUT/``:
-
-``results.csv``
-    One row per cell (tidy): the sequence, the method and its rule, fusion and cues, the
-    seed, the CLEAR MOT and identity scores, the centre errors, the RMS error of the run, the
-    mean particle count, the share of target-frames flagged as occluded, and the timings
-    (:data:`TIMING_COLUMNS`, the only columns that differ between two runs of the same grid).
-``rms.csv``
-    The RMS position error of every target at every frame over the seeds, W (36):
-    ``RMS_t = sqrt(1/n_runs · Σ_k [(x_k(t) − x̂_k(t))² + (y_k(t) − ŷ_k(t))²])``, with box
-    centres.  When the tracks start from the ground truth a target's estimate is the track
-    with its id; with the automatic initiation it is the track paired with it in that frame
-    (IoU ≥ 0.5).  ``runs`` counts the runs that had an estimate.
-``summary.csv``
-    Per sequence and method: the mean and standard deviation over the seeds of the main
-    scores.
-``experiment.json``
-    The grid as it was resolved (absolute paths, every setting).
+The outputs, in ``OUT/``, are ``results.csv`` (one row per cell), ``rms.csv`` (the RMS
+position error of every target at every frame over the seeds, W (36)) and ``summary.csv``
+(mean and standard deviation over the seeds), described column by column in
+:mod:`plugins.video_tracking.tables`, and ``experiment.json`` (the grid as it was resolved:
+absolute paths, every setting).
 
 The configuration is a TOML file::
 
