@@ -41,6 +41,7 @@ from plugins.video_tracking.appearance import AppearanceFollower
 from plugins.video_tracking.background import BackgroundModel
 from plugins.video_tracking.config import TrackerConfig
 from plugins.video_tracking.cues import CUES, Observation
+from plugins.video_tracking.detections import Detections
 from plugins.video_tracking.errors import InitError, TrackingError
 from plugins.video_tracking.initiation import InitPlan
 from plugins.video_tracking.particles import CX, CY, LOG_SCALE, VX, VY, ConstantVelocity, ParticleSet, adaptive_count
@@ -238,16 +239,19 @@ class Tracker:
             raise TrackingError("this tracker was made without frames=; use tracker.track(frames)")
         return self.track(self.frames)
 
-    def track(self, frames: Iterable[np.ndarray], first_frame: int = 1) -> Iterator[FrameResult]:
+    def track(self, frames: Iterable[np.ndarray], first_frame: int = 1,
+              detections: Detections | None = None) -> Iterator[FrameResult]:
         """Track ``frames`` one by one, numbered from ``first_frame``; yields a :class:`FrameResult` each.
 
         Frames are read as they are needed, so a video never has to fit in memory.
+        ``detections`` (optional) gives each frame's detector boxes (:meth:`Detections.at`).
         """
         for offset, image in enumerate(frames):
-            yield self.step(first_frame + offset, image)
+            frame = first_frame + offset
+            yield self.step(frame, image, None if detections is None else detections.at(frame))
 
     # -- one frame ----------------------------------------------------------------------------
-    def step(self, frame: int, image: np.ndarray) -> FrameResult:
+    def step(self, frame: int, image: np.ndarray, detections: np.ndarray | None = None) -> FrameResult:
         """Process 1-based ``frame``: the six stages of the module's description.
 
         Parameters
@@ -256,6 +260,10 @@ class Tracker:
             1-based frame number, increasing by one per call.
         image : ndarray of uint8, shape (H, W, 3)
             The BGR frame.
+        detections : ndarray, shape (n, 5), optional
+            The frame's detector boxes ``x, y, w, h, score`` in 0-based pixels
+            (:meth:`Detections.at <plugins.video_tracking.detections.Detections.at>`); None
+            when the run has no detector.
 
         Returns
         -------
