@@ -1,8 +1,10 @@
 """Video input and output with OpenCV, kept at the edge of the plugin.
 
 :class:`VideoReader` decodes a file frame by frame (BGR ``uint8`` arrays) and times the
-decoding, so a run can report its tracking speed without it; :class:`AnnotatedVideoWriter`
-draws the tracked boxes and ids on the frames and writes a Motion-JPEG ``.avi``.
+decoding, so a run can report its tracking speed without it; :class:`ImageSequenceReader`
+does the same for a list of image files (a folder of images, a MOTChallenge sequence or a
+numbered file pattern); :class:`AnnotatedVideoWriter` draws the tracked boxes and ids on the
+frames and writes a Motion-JPEG ``.avi``.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import numpy as np
 
 from plugins.video_tracking.errors import VideoError
 
-__all__ = ["VideoReader", "AnnotatedVideoWriter", "track_colour"]
+__all__ = ["VideoReader", "ImageSequenceReader", "AnnotatedVideoWriter", "track_colour"]
 
 
 class VideoReader:
@@ -97,6 +99,99 @@ class VideoReader:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+class ImageSequenceReader:
+    """Frames of a list of image files, decoded lazily, one file a frame.
+
+    The first image is decoded on opening, so an unreadable first image fails at once; a
+    later image that cannot be decoded, or whose size differs from the first one, raises a
+    one-line :class:`VideoError` naming that file when its turn comes.  Iterating again
+    starts from the first image again.
+
+    Parameters
+    ----------
+    files : sequence of str or path-like
+        The images, in frame order (at least one).
+    name : str
+        How messages name the sequence (its folder or pattern).
+    fps : float
+        Frame rate to report (image files carry none).
+    size : (int, int), optional
+        ``(width, height)`` that the images must have (a MOTChallenge ``seqinfo.ini`` says);
+        by default the size of the first image.
+
+    Attributes
+    ----------
+    width, height : int
+        Frame size in pixels.
+    fps : float
+    frame_count : int
+        Number of files.
+    decode_seconds : float
+        Time spent decoding so far.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> for k in (1, 2):
+    ...     _ = cv2.imwrite(str(folder / f"{k:06d}.png"), np.full((6, 8, 3), 10 * k, np.uint8))
+    >>> reader = ImageSequenceReader(sorted(folder.iterdir()), name=str(folder))
+    >>> reader.width, reader.height, reader.frame_count, [int(f[0, 0, 0]) for f in reader]
+    (8, 6, 2, [10, 20])
+    >>> int(reader.read(1)[0, 0, 0])
+    20
+    """
+
+    def __init__(self, files, name: str, fps: float = 25.0, size: tuple[int, int] | None = None) -> None:
+        self.files = [str(f) for f in files]
+        if not self.files:
+            raise VideoError(f"{name}: no image to read")
+        self.name = name
+        self.fps = float(fps)
+        self.frame_count = len(self.files)
+        self.decode_seconds = 0.0
+        self.width = self.height = 0
+        first = self._decode(0)
+        height, width = first.shape[:2]
+        if size is not None and tuple(size) != (width, height):
+            raise VideoError(f"{self.files[0]}: image of size {width}x{height}, but {name} says "
+                             f"{size[0]}x{size[1]}")
+        self.width, self.height = width, height
+
+    def _decode(self, index: int) -> np.ndarray:
+        file = self.files[index]
+        start = time.perf_counter()
+        # imdecode of the bytes rather than imread: imread prints its own warnings to the
+        # terminal and cannot tell a missing file from one it cannot decode.
+        try:
+            data = np.fromfile(file, dtype=np.uint8)
+        except OSError as exc:
+            raise VideoError(f"cannot read image {file!r}: {exc.strerror or exc}") from None
+        image = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
+        self.decode_seconds += time.perf_counter() - start
+        if image is None:
+            raise VideoError(f"cannot read image {file!r}: OpenCV cannot decode it (not an image, or "
+                             "an unsupported format)")
+        if self.width and image.shape[:2] != (self.height, self.width):
+            raise VideoError(f"image {file!r} has size {image.shape[1]}x{image.shape[0]}, the earlier "
+                             f"images of {self.name} {self.width}x{self.height}")
+        return np.ascontiguousarray(image, dtype=np.uint8)
+
+    def read(self, index: int) -> np.ndarray:
+        """The frame of 0-based ``index``."""
+        return self._decode(index)
+
+    def __len__(self) -> int:
+        return self.frame_count
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        for index in range(self.frame_count):
+            yield self._decode(index)
+
+    def close(self) -> None:
+        """Nothing to release (each image file is closed once read)."""
 
 
 def track_colour(track_id: int) -> tuple[int, int, int]:
