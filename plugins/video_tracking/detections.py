@@ -7,13 +7,15 @@ tracker reads them one frame at a time with :meth:`Detections.at`.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping
+from os import PathLike
 
 import numpy as np
 
-from plugins.video_tracking.errors import TrackingError
+from plugins.video_tracking.errors import DetectionFileError, TrackingError
 
-__all__ = ["Detections", "DETECTION_COLUMNS"]
+__all__ = ["Detections", "DETECTION_COLUMNS", "read_detections", "write_detections", "check_detections"]
 
 #: The columns of one frame's detections, 0-based pixels.
 DETECTION_COLUMNS = ("x", "y", "w", "h", "score")
@@ -69,3 +71,181 @@ class Detections:
 
     def __repr__(self) -> str:
         return f"Detections({len(self)} boxes over {len(self._frames)} frames from {self.source!r})"
+
+
+#: Fields a detection line must have: frame, id (unused, -1), x, y, w, h, score.
+_DETECTION_FIELDS = 7
+
+
+def _outside(x: float, y: float, w: float, h: float, width: int, height: int) -> bool:
+    """Whether the 0-based box shares no pixel area with a ``width`` x ``height`` image."""
+    return x + w <= 0 or y + h <= 0 or x >= width or y >= height
+
+
+def read_detections(path: str | PathLike[str], *, frame_count: int | None = None,
+                    image_size: tuple[int, int] | None = None) -> Detections:
+    """Read a MOTChallenge detection file (``det.txt``).
+
+    Each non-blank line is ``frame,id,x,y,w,h,score[,...]``: at least 7 numbers separated by
+    commas (or, if a line has no comma, by white space).  The id (-1 in MOTChallenge files)
+    and the fields after the score are not used.  ``(x, y)`` is the 1-based top-left corner,
+    as in every MOTChallenge file; the result is 0-based, as the tracker counts.
+
+    Parameters
+    ----------
+    path : str or path-like
+    frame_count : int, optional
+        Number of frames of the video: a detection after it is an error.
+    image_size : (int, int), optional
+        ``(width, height)`` of the video's frames: a box wholly outside is an error.
+
+    Returns
+    -------
+    Detections
+        Named by the file's path.
+
+    Raises
+    ------
+    DetectionFileError
+        The file is missing, unreadable or holds no detection, or a line (named with its
+        number) has fewer than 7 fields, a field that is not a number, a frame that is not
+        an integer of at least 1 or is after ``frame_count``, a corner that is not finite, a
+        width or height that is not a positive finite number, a score outside [0, 1], or a
+        box wholly outside the image.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "det.txt"
+    >>> _ = path.write_text("1,-1,11,21,10,20,0.9,-1,-1,-1\\n\\n3,-1,1,1,5,8,0.25\\n")
+    >>> dets = read_detections(path, frame_count=3, image_size=(64, 48))
+    >>> dets.at(1).tolist(), dets.at(3).tolist(), dets.frames
+    ([[10.0, 20.0, 10.0, 20.0, 0.9]], [[0.0, 0.0, 5.0, 8.0, 0.25]], (1, 3))
+    >>> _ = path.write_text("1,-1,11,21,10,20,1.5\\n")
+    >>> read_detections(path)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    plugins.video_tracking.errors.DetectionFileError: .../det.txt, line 1: the score 1.5 is outside [0, 1] ...
+    """
+    from belief.textfiles import read_text
+
+    name = str(path)
+    text = read_text(path, "detection file", DetectionFileError, encoding="utf-8-sig")
+    if frame_count is not None and (isinstance(frame_count, bool) or not isinstance(frame_count, (int, np.integer))
+                                    or frame_count < 1):
+        raise TrackingError(f"frame_count must be a positive integer or None, got {frame_count!r}")
+    by_frame: dict[int, list[list[float]]] = {}
+    for line_number, line in enumerate(text.splitlines(), start=1):
+        stripped = line.strip()
+        if not stripped:
+            continue
+        where = f"{name}, line {line_number}"
+        fields_ = [f.strip() for f in stripped.split(",")] if "," in stripped else stripped.split()
+        if len(fields_) < _DETECTION_FIELDS:
+            raise DetectionFileError(f"{where}: expected at least {_DETECTION_FIELDS} fields "
+                                     f"(frame,-1,x,y,w,h,score,...), got {len(fields_)}")
+        values = []
+        for column, field in enumerate(fields_[:_DETECTION_FIELDS], start=1):
+            try:
+                values.append(float(field))
+            except ValueError:
+                raise DetectionFileError(f"{where}: field {column} is not a number: {field!r}") from None
+        frame, _, x, y, w, h, score = values
+        if not math.isfinite(frame) or frame != int(frame) or frame < 1:
+            raise DetectionFileError(f"{where}: the frame must be an integer of at least 1, got {fields_[0]}")
+        if frame_count is not None and frame > frame_count:
+            raise DetectionFileError(f"{where}: frame {int(frame)} is after the end of the video "
+                                     f"({int(frame_count)} frames)")
+        if not (math.isfinite(x) and math.isfinite(y)):
+            raise DetectionFileError(f"{where}: the corner {fields_[2]},{fields_[3]} is not finite")
+        if not (math.isfinite(w) and math.isfinite(h) and w > 0 and h > 0):
+            raise DetectionFileError(f"{where}: the box size {fields_[4]} x {fields_[5]} is not positive and finite")
+        if not 0.0 <= score <= 1.0:  # NaN fails both comparisons
+            raise DetectionFileError(f"{where}: the score {fields_[6]} is outside [0, 1] (a detector's own "
+                                     "scale must be mapped to [0, 1] first)")
+        if image_size is not None and _outside(x - 1.0, y - 1.0, w, h, *image_size):
+            raise DetectionFileError(f"{where}: the box {fields_[2]},{fields_[3]},{fields_[4]},{fields_[5]} is "
+                                     f"wholly outside the {image_size[0]}x{image_size[1]} image")
+        by_frame.setdefault(int(frame), []).append([x - 1.0, y - 1.0, w, h, score])
+    if not by_frame:
+        raise DetectionFileError(f"{name}: no detections in the file (it is empty)")
+    return Detections(by_frame, source=name)
+
+
+def write_detections(path: str | PathLike[str], detections: Detections) -> None:
+    """Write detections as a MOTChallenge detection file, ``frame,-1,x,y,w,h,score,-1,-1,-1``.
+
+    The corner is written 1-based, boxes to 0.001 px and scores to 1e-6, frame by frame, so
+    :func:`read_detections` gives the detections back to that precision (and writing them
+    again gives the same file).
+
+    Raises
+    ------
+    TrackingError
+        Not :class:`Detections`, or a box under 0.0005 px wide or high (it would be written
+        as 0, which no reader accepts).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "det.txt"
+    >>> write_detections(path, Detections({2: [[10.0, 20.5, 8.0, 16.0, 0.9]]}))
+    >>> path.read_text()
+    '2,-1,11.000,21.500,8.000,16.000,0.900000,-1,-1,-1\\n'
+    >>> read_detections(path).at(2).tolist()
+    [[10.0, 20.5, 8.0, 16.0, 0.9]]
+    """
+    if not isinstance(detections, Detections):
+        raise TrackingError(f"write_detections needs Detections, got {type(detections).__name__}")
+    for frame in detections.frames:
+        if (detections.at(frame)[:, 2:4] < 0.0005).any():
+            raise TrackingError(f"{detections.source}: frame {frame} has a box narrower or lower than 0.0005 px, "
+                                "which the file's 0.001 px would write as 0")
+    with open(path, "w", encoding="ascii", newline="\n") as handle:
+        for frame in detections.frames:
+            for x, y, w, h, score in detections.at(frame).tolist():
+                handle.write(f"{frame},-1,{x + 1.0:.3f},{y + 1.0:.3f},{w:.3f},{h:.3f},{score:.6f},-1,-1,-1\n")
+
+
+def check_detections(detections: Detections, *, frame_count: int | None = None,
+                     image_size: tuple[int, int] | None = None) -> None:
+    """Refuse detections that do not fit a video: after its last frame, or wholly outside its image.
+
+    Parameters
+    ----------
+    detections : Detections
+    frame_count : int, optional
+        Number of frames of the video, if known.
+    image_size : (int, int), optional
+        ``(width, height)`` of the frames.
+
+    Raises
+    ------
+    TrackingError
+        Not :class:`Detections`, or the first detection that does not fit (named with its
+        frame and the detections' source).
+
+    Examples
+    --------
+    >>> dets = Detections({4: [[10.0, 20.0, 8.0, 16.0, 0.9]]}, source="det.txt")
+    >>> check_detections(dets, frame_count=4, image_size=(64, 48))
+    >>> check_detections(dets, frame_count=3)
+    Traceback (most recent call last):
+    ...
+    plugins.video_tracking.errors.DetectionFileError: det.txt: frame 4 is after the end of the video (3 frames)
+    """
+    if not isinstance(detections, Detections):
+        raise TrackingError(f"detections must be Detections or None, got {type(detections).__name__}")
+    frames = detections.frames
+    if frame_count is not None and frames and frames[-1] > frame_count:
+        raise DetectionFileError(f"{detections.source}: frame {frames[-1]} is after the end of the video "
+                                 f"({int(frame_count)} frames)")
+    if frames and frames[0] < 1:
+        raise DetectionFileError(f"{detections.source}: frame {frames[0]} is before the first frame (1)")
+    if image_size is not None:
+        width, height = image_size
+        for frame in frames:
+            for x, y, w, h, _ in detections.at(frame).tolist():
+                if _outside(x, y, w, h, width, height):
+                    raise DetectionFileError(f"{detections.source}: frame {frame} has the box {x:g},{y:g},{w:g},"
+                                             f"{h:g} (0-based) wholly outside the {width}x{height} image")

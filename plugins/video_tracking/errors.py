@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from belief.errors import BeliefError
 
-__all__ = ["TrackingError", "TrackFileError", "UnknownCueError", "VideoError", "InitError"]
+__all__ = ["TrackingError", "TrackFileError", "DetectionFileError", "UnknownCueError", "VideoError", "InitError"]
 
 
 class TrackingError(BeliefError, ValueError):
@@ -18,6 +18,10 @@ class TrackingError(BeliefError, ValueError):
 
 class TrackFileError(TrackingError):
     """A track or ground-truth file is missing, unreadable, empty or malformed."""
+
+
+class DetectionFileError(TrackFileError):
+    """A detection file is missing, unreadable, empty or malformed, or does not fit the video."""
 
 
 class UnknownCueError(TrackingError):
