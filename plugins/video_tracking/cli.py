@@ -1,6 +1,9 @@
 """The plugin's ``belief`` subcommands: ``track``, ``eval`` and ``experiment`` (entry points ``belief.commands``).
 
-``belief track VIDEO --out DIR [options]`` tracks a video: with no init file the tracks are
+``belief track SOURCE --out DIR [options]`` tracks a video file, a folder of images, an
+image pattern (``img1/%06d.jpg``) or a MOTChallenge sequence folder
+(:func:`~plugins.video_tracking.sources.open_source`); ``--detections DET.txt`` adds a
+detector's boxes (a MOTChallenge detection file).  With no init file the tracks are
 started and ended automatically from the background model (SPEC B.4); ``--init BOXES``
 gives the targets of the first frame (later entries are still found automatically);
 ``--init-from-gt GT.txt`` takes every birth and death from a ground truth and scores the
@@ -96,6 +99,8 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
         options["adaptive_particles"] = True
     if args.template_update:
         options["template_update"] = True
+    if args.detections is not None:
+        _add_detections_cue(options)
     automatic = not args.demo and args.init_from_gt is None
     if automatic and options.get("initiation") is not False:
         # Without an init file every track starts from the background model, which must know
@@ -108,36 +113,70 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
     return options
 
 
+def _add_detections_cue(options: dict[str, Any]) -> None:
+    """Fuse the detections cue with the chosen cues, when the cue registry has one and it is not chosen yet."""
+    from plugins.video_tracking.config import TrackerConfig
+    from plugins.video_tracking.cues import CUES
+
+    if "detections" not in CUES:
+        return  # the tracker still receives the boxes; no cue turns them into masses yet
+    cues = options.get("cues", TrackerConfig().cues)
+    if isinstance(cues, str):
+        cues = (cues,)
+    if isinstance(cues, (list, tuple)) and "detections" not in cues:
+        options["cues"] = tuple(cues) + ("detections",)
+
+
+def _detections(args: argparse.Namespace, frame_count: int | None, width: int, height: int):
+    from plugins.video_tracking.detections import read_detections
+
+    if args.detections is None:
+        return None
+    return read_detections(args.detections, frame_count=frame_count, image_size=(width, height))
+
+
 def _cmd_track(args: argparse.Namespace) -> int:
     from plugins.video_tracking import scenes
     from plugins.video_tracking.config import TrackerConfig
     from plugins.video_tracking.errors import TrackingError
     from plugins.video_tracking.initiation import init_from_gt, read_init_boxes
     from plugins.video_tracking.runner import run
+    from plugins.video_tracking.sources import open_source
 
     config = TrackerConfig.from_settings(_settings(args), "belief track")
     progress = not args.no_progress
 
     if args.demo:
-        if args.video is not None or args.init_from_gt is not None or args.init is not None or args.gt is not None:
-            raise TrackingError("--demo takes no VIDEO, --init, --init-from-gt or --gt")
+        if args.source is not None or args.init_from_gt is not None or args.init is not None or args.gt is not None:
+            raise TrackingError("--demo takes no SOURCE, --init, --init-from-gt or --gt")
         scene = scenes.render(scenes.demo(args.seed))
         gt = scene.ground_truth
-        extra = {"gt.txt": lambda path: scenes.write_gt(path, gt),
+        height, width = scene.frames.shape[1:3]
+        detections = _detections(args, len(scene), width, height)
+        extra = {"gt.txt": lambda path: scenes.write_gt(path, gt, visibility=scene.visibility),
                  "scene.avi": lambda path: scenes.write_video(path, scene)}
         summary = run(scene, init_from_gt(gt, source="demo scene ground truth"), config, args.out, args.seed,
-                      write_video=not args.no_video, progress=progress, gt=gt, extra_outputs=extra)
+                      write_video=not args.no_video, progress=progress, gt=gt, extra_outputs=extra,
+                      detections=detections)
     else:
-        if args.video is None:
-            raise TrackingError("give a VIDEO to track, or --demo")
+        if args.source is None:
+            raise TrackingError("give a SOURCE to track (a video, a folder of images, an image pattern or a "
+                                "MOTChallenge sequence folder), or --demo")
         plan, gt = None, args.gt
         if args.init_from_gt is not None:
             plan = init_from_gt(args.init_from_gt)
             gt = gt if gt is not None else args.init_from_gt
         elif args.init is not None:
             plan = read_init_boxes(args.init)
-        summary = run(args.video, plan, config, args.out, args.seed, write_video=not args.no_video,
-                      progress=progress, gt=gt)
+        frames = open_source(args.source)
+        try:
+            # The detection file is checked against the source's length and size, naming its lines.
+            detections = _detections(args, frames.count, frames.width, frames.height)
+        except BaseException:
+            frames.close()
+            raise
+        summary = run(frames, plan, config, args.out, args.seed, write_video=not args.no_video,
+                      progress=progress, gt=gt, detections=detections)
     print(f"tracked {summary.frames} frames: {summary.tracking_fps:.1f} fps tracking, "
           f"{summary.overall_fps:.1f} fps overall; outputs in {args.out}")
     if summary.scores is not None:
@@ -155,19 +194,24 @@ def register(subparsers: Any) -> None:
     >>> parser = argparse.ArgumentParser(prog="belief")
     >>> register(parser.add_subparsers(dest="command"))
     >>> args = parser.parse_args(["track", "v.avi", "--init", "boxes.csv", "--out", "o", "--particles", "30"])
-    >>> args.video, args.init, args.particles, args.seed
-    ('v.avi', 'boxes.csv', 30, 0)
+    >>> args.source, args.init, args.particles, args.seed, args.detections
+    ('v.avi', 'boxes.csv', 30, 0, None)
     """
     p = subparsers.add_parser(
         "track", help="track people in a video with the DSmT multi-cue particle filter",
-        description="Track targets in a video: one particle filter per target, each particle weighted by "
+        description="Track targets in a video (a video file, a folder of images, an image pattern such as "
+                    "img1/%06d.jpg, or a MOTChallenge sequence folder with its seqinfo.ini): one particle filter "
+                    "per target, each particle weighted by "
                     "fusing colour, location, foreground and edge cues over {t1..tN, FA} with a belief-function "
                     "rule (or the adaptive, sum or product fusion). Without an init file, tracks start on "
                     "foreground blobs entering the image and end when they leave. Writes tracks.txt "
                     "(MOTChallenge), diagnostics.csv, diagnostics.png, annotated.avi and summary.json into "
-                    "--out. With --demo, renders a synthetic scene, tracks it from its ground truth and prints "
-                    "the scores.")
-    p.add_argument("video", nargs="?", metavar="VIDEO", help="the video file to track")
+                    "--out, and removes those of an earlier run there that this run does not write. With --demo, "
+                    "renders a synthetic scene, tracks it from its ground truth and prints the scores.")
+    p.add_argument("source", nargs="?", metavar="SOURCE",
+                   help="what to track: a video file; a folder of images (.jpg, .png, .bmp, .tif, ..., taken in "
+                        "the order of their names); an image pattern such as img1/%%06d.jpg (from number 0 or 1 "
+                        "to the first missing file); or a MOTChallenge sequence folder (with seqinfo.ini)")
     init = p.add_mutually_exclusive_group()
     init.add_argument("--init-from-gt", metavar="GT.txt",
                       help="MOTChallenge ground truth: each id is born at its first box and removed after its last "
@@ -176,6 +220,10 @@ def register(subparsers: Any) -> None:
                       help="CSV of id,x,y,w,h lines (1-based corner, as in MOT files): targets of the first frame; "
                            "people entering later are found automatically")
     p.add_argument("--demo", action="store_true", help="track the embedded synthetic demo scene")
+    p.add_argument("--detections", metavar="DET.txt",
+                   help="a detector's boxes, MOTChallenge detection file: frame,-1,x,y,w,h,score,... per line "
+                        "(1-based corner, score in [0, 1]); a MOTChallenge sequence has its public detections at "
+                        "SEQ/det/det.txt, which are used only when given here")
     p.add_argument("--gt", metavar="GT.txt", help="MOTChallenge ground truth to score the tracks against "
                                                   "(implied by --init-from-gt)")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")
@@ -214,7 +262,8 @@ def _cmd_eval(args: argparse.Namespace) -> int:
     from plugins.video_tracking.evaluation import evaluate
     from plugins.video_tracking.motfiles import read_mot
 
-    tracks = read_mot(args.tracks)
+    # A run that found nobody writes an empty tracks.txt: it scores as missing every box.
+    tracks = read_mot(args.tracks, allow_empty=True)
     gt = read_mot(args.gt)
     scores = evaluate(gt, tracks)
     if args.json:
@@ -246,7 +295,8 @@ def register_eval(subparsers: Any) -> None:
         description="Score MOTChallenge tracks against ground truth: CLEAR MOT (IoU >= 0.5), IDF1, "
                     "ID switches, false positives, misses and box-centre errors. Ground-truth rows "
                     "with flag 0 are not scored, and hypotheses matched to them are dropped. "
-                    "MOTP is the mean IoU of the matched pairs.")
+                    "MOTP is the mean IoU of the matched pairs. An empty tracks file (a run that found "
+                    "nobody) misses every box: MOTA 0, IDF1 0.")
     p.add_argument("tracks", metavar="TRACKS.txt", help="tracker output, MOTChallenge CSV")
     p.add_argument("gt", metavar="GT.txt", help="ground truth, MOTChallenge CSV")
     p.add_argument("--json", action="store_true", help="print JSON")

@@ -7,7 +7,10 @@
 * ``diagnostics.png`` — the curves of W's Fig. 10, one line per target.
 
 :class:`StagedOutputs` writes every file under a temporary name and renames them all at the
-end, ``summary.json`` last, so a run that fails leaves nothing that looks complete.
+end, ``summary.json`` last, so a run that fails leaves nothing that looks complete; a run that
+succeeds also removes the files of :data:`RUN_OUTPUTS` that it did not write (an
+``annotated.avi`` of an earlier run, when this one has ``--no-video``), so that the directory
+holds the outputs of its latest run only.
 """
 
 from __future__ import annotations
@@ -25,7 +28,10 @@ import numpy as np
 
 from plugins.video_tracking.errors import TrackingError
 
-__all__ = ["StagedOutputs", "write_diagnostics", "write_summary", "plot_diagnostics"]
+__all__ = ["StagedOutputs", "RUN_OUTPUTS", "write_diagnostics", "write_summary", "plot_diagnostics"]
+
+#: The files that a tracking run may write into its output directory.
+RUN_OUTPUTS = ("tracks.txt", "diagnostics.csv", "diagnostics.png", "annotated.avi", "summary.json")
 
 
 class StagedOutputs:
@@ -34,27 +40,39 @@ class StagedOutputs:
     Parameters
     ----------
     out_dir : path
-        The output directory; created if needed (and removed again by :meth:`abort` if it was
-        created here and is left empty).
+        The output directory; created if needed (and removed again by :meth:`abort`, with the
+        parents created with it, if it was created here and is left empty).
+    owned : sequence of str
+        The names that this kind of run writes: on :meth:`commit`, those of them that this run
+        did not write are deleted from the directory, as left over from an earlier run.  Other
+        files are never touched.
 
     Examples
     --------
     >>> import tempfile
     >>> folder = Path(tempfile.mkdtemp()) / "run"
-    >>> staged = StagedOutputs(folder)
+    >>> staged = StagedOutputs(folder, owned=("tracks.txt", "annotated.avi"))
     >>> _ = staged.path("tracks.txt").write_text("1,1,1,1,2,2,-1,-1,-1,-1\\n")
     >>> sorted(p.name for p in folder.iterdir())
     ['.tracks.partial.txt']
+    >>> _ = (folder / "annotated.avi").write_text("from an earlier run")
+    >>> _ = (folder / "notes.txt").write_text("the user's own")
     >>> _ = staged.commit()
     >>> sorted(p.name for p in folder.iterdir())
-    ['tracks.txt']
+    ['notes.txt', 'tracks.txt']
     """
 
-    def __init__(self, out_dir: str | PathLike[str]) -> None:
+    def __init__(self, out_dir: str | PathLike[str], owned: Sequence[str] = ()) -> None:
         self.out_dir = Path(out_dir)
         if self.out_dir.exists() and not self.out_dir.is_dir():
             raise TrackingError(f"the output {str(out_dir)!r} exists and is not a directory")
-        self._created = not self.out_dir.exists()
+        self._owned = tuple(owned)
+        # The directories created here, innermost first, for abort to remove again.
+        self._created_dirs: list[Path] = []
+        for folder in (self.out_dir, *self.out_dir.parents):
+            if folder.exists():
+                break
+            self._created_dirs.append(folder)
         try:
             self.out_dir.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
@@ -70,7 +88,23 @@ class StagedOutputs:
         return staged
 
     def commit(self) -> dict[str, Path]:
-        """Rename every staged file to its final name, ``summary.json`` last; returns the final paths."""
+        """Rename every staged file to its final name, ``summary.json`` last; returns the final paths.
+
+        The owned names that this run did not write are deleted first, and so is an earlier
+        ``summary.json``, so that no summary describes a mix of two runs even for a moment.
+        """
+        written = {name for name, staged in self._staged.items() if staged.exists()}
+        stale = [name for name in self._owned if name not in written]
+        if "summary.json" in written:
+            stale.append("summary.json")
+        for name in stale:
+            try:
+                (self.out_dir / name).unlink()
+            except (FileNotFoundError, IsADirectoryError):
+                pass  # a directory of that name is not a run's file: somebody else's
+            except OSError as exc:
+                raise TrackingError(f"cannot remove {str(self.out_dir / name)!r} of an earlier run: "
+                                    f"{exc.strerror or exc}") from None
         order = sorted(self._staged, key=lambda name: name == "summary.json")
         final = {}
         for name in order:
@@ -89,11 +123,11 @@ class StagedOutputs:
             except FileNotFoundError:
                 pass
         self._staged.clear()
-        if self._created:
+        for folder in self._created_dirs:
             try:
-                self.out_dir.rmdir()
+                folder.rmdir()
             except OSError:
-                pass
+                break
 
 
 def write_diagnostics(path: str | PathLike[str], records: Sequence[Mapping[str, float]],

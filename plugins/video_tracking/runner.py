@@ -17,7 +17,8 @@ import numpy as np
 
 from plugins.video_tracking import outputs
 from plugins.video_tracking.config import TrackerConfig
-from plugins.video_tracking.errors import InitError, TrackingError
+from plugins.video_tracking.detections import Detections, check_detections
+from plugins.video_tracking.errors import DetectionFileError, InitError, TrackingError
 from plugins.video_tracking.initiation import InitPlan
 from plugins.video_tracking.motfiles import read_mot, write_tracks
 from plugins.video_tracking.sources import open_source
@@ -65,13 +66,15 @@ class Summary:
 
 def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), out_dir: str | PathLike[str] = "track",
         seed: int = 0, write_video: bool = True, progress: bool = True, gt: np.ndarray | str | None = None,
-        extra_outputs: dict | None = None, write_plot: bool = True) -> Summary:
+        extra_outputs: dict | None = None, write_plot: bool = True, detections: Detections | None = None) -> Summary:
     """Track ``source`` and write the outputs into ``out_dir``.
 
     Parameters
     ----------
-    source : path, Scene or ndarray of uint8, shape (T, H, W, 3)
-        A video file (decoded with OpenCV, frame by frame), a rendered synthetic scene, or frames.
+    source : path, FrameSource, Scene or ndarray of uint8, shape (T, H, W, 3)
+        Anything :func:`~plugins.video_tracking.sources.open_source` opens: a video file, a
+        folder of images, an image pattern or a MOTChallenge sequence folder (all decoded
+        frame by frame), a source already open, a rendered synthetic scene, or frames.
     init : InitPlan or None
         Births and deaths of the targets (:func:`~plugins.video_tracking.initiation.init_from_gt`,
         :func:`~plugins.video_tracking.initiation.read_init_boxes`); None leaves them all to
@@ -82,7 +85,9 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
     out_dir : path
         Receives ``tracks.txt``, ``diagnostics.csv``, ``diagnostics.png`` (unless
         ``write_plot`` is false), ``annotated.avi`` (unless ``write_video`` is false) and
-        ``summary.json``, written last.
+        ``summary.json``, written last.  Of these names, those that the run does not write
+        (``annotated.avi`` with ``write_video`` false, say) are removed from the directory when
+        the run succeeds, so that it holds the outputs of one run only; other files are left.
     seed : int
         Seed of the run's only random generator.
     progress : bool
@@ -93,6 +98,11 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
         Further files ``name -> write(path)``, committed with the others.
     write_plot : bool
         Draw ``diagnostics.png``.
+    detections : Detections, optional
+        A detector's boxes by frame (:func:`~plugins.video_tracking.detections.read_detections`),
+        given to the tracker frame by frame; the summary records their source.  Detections
+        after the last frame or wholly outside the image are refused before anything is
+        written.
 
     Returns
     -------
@@ -101,7 +111,8 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
     Raises
     ------
     TrackingError
-        Unreadable video (:class:`VideoError`), boxes outside the image (:class:`InitError`), …
+        Unreadable video (:class:`VideoError`), boxes outside the image (:class:`InitError`),
+        detections that do not fit the video (:class:`DetectionFileError`), …
         On any error the staged files are deleted: nothing that looks complete is left.
     """
     from tqdm import tqdm
@@ -118,6 +129,8 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
         raise TrackingError(f"config must be a TrackerConfig, got {type(config).__name__}")
     if init is None and config.initiation is None:
         raise InitError("nothing to track: give an init plan or turn on the automatic initiation")
+    if detections is not None and not isinstance(detections, Detections):
+        raise TrackingError(f"detections must be Detections or None, got {type(detections).__name__}")
     started = time.perf_counter()
     frames = open_source(source)
     try:
@@ -126,7 +139,10 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
             gt_rows = read_mot(gt) if isinstance(gt, (str, PathLike)) else np.asarray(gt, dtype=np.float64)
         if init is not None:
             init.check_image(frames.width, frames.height)
-        staged = outputs.StagedOutputs(out_dir)
+        if detections is not None:
+            check_detections(detections, frame_count=frames.count, image_size=(frames.width, frames.height))
+        owned = outputs.RUN_OUTPUTS + tuple(extra_outputs or ())
+        staged = outputs.StagedOutputs(out_dir, owned=owned)
     except BaseException:
         frames.close()
         raise
@@ -150,7 +166,7 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
                 yield image
 
         try:
-            for result in tracker.track(remembered()):
+            for result in tracker.track(remembered(), detections=detections):
                 tracking_seconds += result.seconds
                 frame_rows = result.mot_rows()
                 for row, estimate in zip(frame_rows, result.estimates):
@@ -168,6 +184,10 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
                 writer.close()
         if count == 0:
             raise TrackingError(f"{frames.name}: no frame to track")
+        if detections is not None and detections.frames and detections.frames[-1] > count:
+            # A container may announce more frames than it holds, so the check before the run can miss this.
+            raise DetectionFileError(f"{detections.source}: frame {detections.frames[-1]} is after the end of "
+                                     f"the video ({count} frames)")
         tracks = np.array(rows, dtype=np.float64).reshape(-1, 10)
         write_tracks(staged.path("tracks.txt"), rows)
         outputs.write_diagnostics(staged.path("diagnostics.csv"), records, ("frame", "id") + tracker.diagnostic_columns)
@@ -190,6 +210,7 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
                     "tracking_seconds": tracking_seconds, "overall_seconds": overall},
             "seed": int(seed),
             "init": init.source if init is not None else "automatic initiation",
+            "detections": detections.source if detections is not None else None,
             "parameters": asdict(config),
             "version": __version__,
             "scores": scores.to_dict() if scores is not None else None,
