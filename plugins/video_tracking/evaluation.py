@@ -366,7 +366,8 @@ def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
         scored; without a flag column, every row is.
     hyp : array_like, shape (M, 6..10)
         Tracker rows, same layout; the 7th column (a confidence) is not used.  May be
-        empty.
+        empty (a run that found nobody): every scored box is then a miss, MOTA is 0 and
+        IDF1 is 0.
     max_iou_distance : float, default 0.5
         Largest ``1 − IoU`` that still allows a pairing (0.5: IoU ≥ 0.5).
 
@@ -400,6 +401,12 @@ def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
     0.3333
     >>> scores.mean_centre_error   # 0, 0 and 1 pixel
     0.3333333333333333
+
+    No tracks at all miss every box:
+
+    >>> nothing = evaluate(gt, np.zeros((0, 7)))
+    >>> nothing.mota, nothing.idf1, nothing.false_negatives, nothing.matched_pairs
+    (0.0, 0.0, 3, 0)
     """
     accumulator, gt_rows, hyp_rows, ignored_predictions = _accumulate(gt, hyp, max_iou_distance)
     import motmetrics

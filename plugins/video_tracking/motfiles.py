@@ -28,7 +28,7 @@ _FRAME, _ID, _X, _Y, _W, _H, _FLAG = range(len(MOT_COLUMNS))
 _MIN_FIELDS, _MAX_FIELDS = 6, 10
 
 
-def read_mot(path: str | PathLike[str]) -> np.ndarray:
+def read_mot(path: str | PathLike[str], *, allow_empty: bool = False) -> np.ndarray:
     """Read a MOTChallenge track or ground-truth file.
 
     Each non-blank line is ``frame,id,x,y,w,h[,flag[,a[,b[,c]]]]``: 6 to 10 numbers
@@ -40,6 +40,9 @@ def read_mot(path: str | PathLike[str]) -> np.ndarray:
     ----------
     path : str or path-like
         The file to read.
+    allow_empty : bool, default False
+        Accept a file without any box (tracks of a run that found nobody) and return no
+        rows; a ground truth without boxes stays an error.
 
     Returns
     -------
@@ -50,7 +53,7 @@ def read_mot(path: str | PathLike[str]) -> np.ndarray:
     Raises
     ------
     TrackFileError
-        The file is missing or unreadable, holds no rows, or a line (named with its
+        The file is missing or unreadable, holds no rows (unless ``allow_empty``), or a line (named with its
         number) has the wrong number of fields, a field that is not a finite number, a
         frame or id that is not an integer, a negative width or height, or repeats the
         id of an earlier line of the same frame.
@@ -64,6 +67,11 @@ def read_mot(path: str | PathLike[str]) -> np.ndarray:
     ...     read_mot(path)
     array([[ 1.,  7., 10., 20., 30., 40.,  1.],
            [ 2.,  7., 12., 20., 30., 40.,  0.]])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = pathlib.Path(folder) / "tracks.txt"
+    ...     _ = path.write_text("")
+    ...     read_mot(path, allow_empty=True).shape
+    (0, 7)
     """
     name = str(path)
     text = read_text(path, "track file", TrackFileError, encoding="utf-8-sig")
@@ -101,10 +109,9 @@ def read_mot(path: str | PathLike[str]) -> np.ndarray:
                 f"{where}: frame {key[0]} has id {key[1]} twice (first on line {first_line_of[key]})")
         first_line_of[key] = line_number
         rows.append(values[:7] if len(values) > 6 else values + [1.0])
-    if not rows:
+    if not rows and not allow_empty:
         raise TrackFileError(f"{name}: no boxes in the file (it is empty)")
-    return np.asarray(rows, dtype=float)
-
+    return np.asarray(rows, dtype=float).reshape(-1, len(MOT_COLUMNS))
 
 
 def write_tracks(path: str | PathLike[str], rows: Sequence[Sequence[float]]) -> None:
