@@ -635,7 +635,7 @@ def render(config: SceneConfig, rng: np.random.Generator | None = None) -> Scene
 
 # -- output --------------------------------------------------------------------------------------------------
 
-def write_gt(path: str | Path, rows: np.ndarray) -> None:
+def write_gt(path: str | Path, rows: np.ndarray, visibility: np.ndarray | None = None) -> None:
     """Write ground-truth (or tracker) rows as a MOTChallenge CSV file.
 
     Parameters
@@ -645,11 +645,18 @@ def write_gt(path: str | Path, rows: np.ndarray) -> None:
     rows : array_like, shape (M, K), K >= 6
         ``frame, id, x, y, w, h, ...`` with 1-based frames and corners.  Integer arrays
         are written as integers; float arrays use ``%.6f`` with trailing zeros removed.
+    visibility : array_like, shape (M,), optional
+        Each row's visible fraction in [0, 1] (:attr:`Scene.visibility`).  With it, the
+        file has the 9 columns of a MOTChallenge 17 ground truth,
+        ``frame, id, x, y, w, h, flag, class, visibility``: the flag is the 7th column of
+        ``rows`` (1 when ``rows`` has 6), the class is 1 (pedestrian), as evaluation tools
+        that read MOT17 files expect.  Without it, ``rows`` are written as they are.
 
     Raises
     ------
     TrackingError
-        If ``rows`` is not a table with at least 6 columns.
+        If ``rows`` is not a table with at least 6 columns, or ``visibility`` does not give
+        one value in [0, 1] per row.
 
     Examples
     --------
@@ -658,11 +665,24 @@ def write_gt(path: str | Path, rows: np.ndarray) -> None:
     >>> write_gt(path, [[1, 1, 10, 20, 5, 8, 1, -1, -1, -1]])
     >>> open(path).read()
     '1,1,10,20,5,8,1,-1,-1,-1\\n'
+    >>> scene = render(crossing(0))
+    >>> write_gt(path, scene.ground_truth, visibility=scene.visibility)
+    >>> open(path).read().splitlines()[0]
+    '1,1,97,129,18,52,1,1,1'
     """
     table = np.asarray(rows)
     if table.ndim != 2 or (table.size and table.shape[1] < 6):
         raise TrackingError(f"rows must be a table of shape (M, K) with K >= 6, got shape {table.shape}")
-    if np.issubdtype(table.dtype, np.integer):
+    if visibility is not None:
+        seen = np.asarray(visibility, dtype=np.float64).reshape(-1)
+        if seen.shape != (len(table),) or not np.all((seen >= 0) & (seen <= 1)):
+            raise TrackingError(f"visibility must give one value in [0, 1] per row ({len(table)}), "
+                                f"got shape {np.shape(visibility)}")
+        flags = table[:, 6] if table.shape[1] > 6 else np.ones(len(table), dtype=table.dtype)
+        lines = [",".join([*(_format_number(float(v)) for v in row[:6]), _format_number(float(flag)), "1",
+                           _format_number(float(v))])
+                 for row, flag, v in zip(table, flags, seen)]
+    elif np.issubdtype(table.dtype, np.integer):
         lines = [",".join(str(int(v)) for v in row) for row in table]
     else:
         lines = [",".join(_format_number(float(v)) for v in row) for row in table]
