@@ -117,6 +117,11 @@ def test_readme_main_command_runs_the_tracking_demo_and_writes_every_output(tmp_
     assert "MOTA" in printed and "IDF1" in printed and "ID switches" in printed
     summary = json.loads((out / "summary.json").read_text())
     assert summary["frames"] == 100 and summary["seed"] == 2 and summary["parameters"]["particles"] == 30
+    assert summary["detections"] is None
+    # gt.txt has the 9 columns of a MOT17 ground truth: flag 1, class 1 (pedestrian), visibility in [0, 1]
+    gt = np.loadtxt(out / "gt.txt", delimiter=",")
+    assert gt.shape[1] == 9 and (gt[:, 6] == 1).all() and (gt[:, 7] == 1).all()
+    assert gt[:, 8].min() == 0.0 and gt[:, 8].max() == 1.0
     assert summary["parameters"]["cues"] == ["colour", "location", "foreground"]
     assert summary["scores"]["mota"] is not None and summary["version"]
     tracks = np.loadtxt(out / "tracks.txt", delimiter=",")
@@ -197,3 +202,144 @@ def test_every_setting_is_reachable_from_the_command_line(tmp_path):
     assert parameters["masses"] == "normalised" and parameters["adaptive_fusion"]["mix_norm"] == "raw"
     assert parameters["particles"] == 12 and parameters["colour"]["bins"] == 4
     assert parameters["template_update"] is True and parameters["diagnostics"] == "all"
+
+
+# -- sources other than a video file, and detection files ----------------------------------------------
+def write_images(folder: Path, n_frames: int = 4, name: str = "{:06d}.png") -> Path:
+    """Frames of :func:`write_video` as lossless images, one file a frame."""
+    import cv2
+
+    folder.mkdir(parents=True, exist_ok=True)
+    frames = np.full((n_frames, 48, 64, 3), 100, np.uint8)
+    frames[:, 10:30, 20:30] = (40, 40, 190)
+    for k, image in enumerate(frames, start=1):
+        assert cv2.imwrite(str(folder / name.format(k)), image)
+    return folder
+
+
+def write_sequence(folder: Path, n_frames: int = 4, info: str | None = None) -> Path:
+    write_images(folder / "img1", n_frames, "{:06d}.jpg")
+    if info is None:
+        info = f"[Sequence]\nname=walk\nimDir=img1\nframeRate=10\nseqLength={n_frames}\nimWidth=64\nimHeight=48\n" \
+               "imExt=.jpg\n"
+    (folder / "seqinfo.ini").write_text(info)
+    return folder
+
+
+DETECTIONS = "1,-1,21,11,10,20,0.9,-1,-1,-1\n3,-1,22,11,10,20,0.8,-1,-1,-1\n"
+
+
+@pytest.fixture
+def quick_plot(monkeypatch):
+    """diagnostics.png as a stub: drawing the real one costs seconds and is tested with the demo."""
+    from plugins.video_tracking import outputs
+
+    monkeypatch.setattr(outputs, "plot_diagnostics", lambda path, *args, **kwargs: Path(path).write_bytes(b"png"))
+
+BAD_SOURCES = {
+    "detections: malformed line": ("det", "1,-1,21,11,10,20,0.9\n2,-1,21,11,10,20\n",
+                                   "det.txt, line 2: expected at least 7 fields"),
+    "detections: not a number": ("det", "1,-1,21,11,10,twenty,0.9\n", "det.txt, line 1: field 6 is not a number"),
+    "detections: negative size": ("det", "\n1,-1,21,11,-10,20,0.9\n", "det.txt, line 2: the box size -10 x 20"),
+    "detections: NaN size": ("det", "1,-1,21,11,10,NaN,0.9\n", "det.txt, line 1: the box size 10 x NaN"),
+    "detections: score above 1": ("det", "1,-1,21,11,10,20,2.5\n", "det.txt, line 1: the score 2.5 is outside [0, 1]"),
+    "detections: NaN score": ("det", "1,-1,21,11,10,20,nan\n", "det.txt, line 1: the score nan is outside [0, 1]"),
+    "detections: past the end": ("det", DETECTIONS + "5,-1,21,11,10,20,0.9\n",
+                                 "det.txt, line 3: frame 5 is after the end of the video (4 frames)"),
+    "detections: outside the image": ("det", "1,-1,100,11,10,20,0.9\n", "wholly outside the 64x48 image"),
+    "unreadable first image": ("first", None, "000001.png': OpenCV cannot decode it"),
+    "unreadable later image": ("later", None, "000003.png': OpenCV cannot decode it"),
+    "images of two sizes": ("size", None, "000004.png' has size 32x24, the earlier images"),
+    "empty folder": ("empty", None, "holds no image file"),
+    "seqinfo.ini without imDir": ("seqinfo", "[Sequence]\nname=walk\nframeRate=10\nseqLength=4\n",
+                                  "seqinfo.ini: no imDir"),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_SOURCES))
+def test_a_bad_source_or_detection_file_is_one_line_and_leaves_no_output(tmp_path, capsys, case):
+    import cv2
+
+    what, text, message = BAD_SOURCES[case]
+    source = write_images(tmp_path / "frames")
+    boxes = tmp_path / "boxes.csv"
+    boxes.write_text("1,21,11,10,20\n")
+    argv = [str(source), "--init", str(boxes)]
+    if what == "det":
+        (tmp_path / "det.txt").write_text(text)
+        argv += ["--detections", str(tmp_path / "det.txt")]
+    elif what == "first":
+        (source / "000001.png").write_bytes(b"not an image at all" * 10)
+    elif what == "later":
+        (source / "000003.png").write_bytes(b"\x89PNG\r\n\x1a\n but then garbage" * 10)
+    elif what == "size":
+        cv2.imwrite(str(source / "000004.png"), np.zeros((24, 32, 3), np.uint8))
+    elif what == "empty":
+        for file in source.iterdir():
+            file.unlink()
+    elif what == "seqinfo":
+        argv[0] = str(write_sequence(tmp_path / "SEQ", info=text))
+    out = tmp_path / "runs" / "out"
+    status = main(["track", *argv, "--out", str(out), "--particles", "10", "--no-progress"])
+    out_text, err = capsys.readouterr()
+    assert status == 1, err
+    assert err.startswith("belief: error:") and err.count("\n") == 1 and "Traceback" not in err
+    assert message in err
+    assert not (tmp_path / "runs").exists()
+
+
+@pytest.mark.parametrize("kind", ["folder", "pattern", "sequence"])
+def test_a_folder_a_pattern_or_a_sequence_is_tracked_with_detections(tmp_path, quick_plot, kind):
+    from plugins.video_tracking.cues import CUES
+
+    if kind == "sequence":
+        folder = write_sequence(tmp_path / "SEQ")
+        source = str(folder)
+        (folder / "det").mkdir()
+        (folder / "det" / "det.txt").write_text(DETECTIONS)
+        detections = folder / "det" / "det.txt"
+    else:
+        folder = write_images(tmp_path / "frames")
+        source = str(folder if kind == "folder" else folder / "%06d.png")
+        detections = tmp_path / "det.txt"
+        detections.write_text(DETECTIONS)
+    boxes = tmp_path / "boxes.csv"
+    boxes.write_text("1,21,11,10,20\n")
+    out = tmp_path / "out"
+    assert track([source, "--init", str(boxes), "--detections", str(detections), "--out", str(out),
+                  "--particles", "10", "--cues", "colour,location", "--no-progress", "--no-video"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["frames"] == 4 and summary["source"] == source and summary["detections"] == str(detections)
+    expected = ["colour", "location"] + (["detections"] if "detections" in CUES else [])
+    assert summary["parameters"]["cues"] == expected
+    assert np.loadtxt(out / "tracks.txt", delimiter=",").shape == (4, 10)
+
+
+def test_the_public_detections_of_a_sequence_are_used_only_when_given(tmp_path, quick_plot, capsys):
+    folder = write_sequence(tmp_path / "SEQ")
+    (folder / "det").mkdir()
+    (folder / "det" / "det.txt").write_text("this line would be refused\n")
+    boxes = tmp_path / "boxes.csv"
+    boxes.write_text("1,21,11,10,20\n")
+    out = tmp_path / "out"
+    assert track([str(folder), "--init", str(boxes), "--out", str(out), "--particles", "10", "--no-progress",
+                  "--no-video"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["detections"] is None and "detections" not in summary["parameters"]["cues"]
+    with pytest.raises(SystemExit):
+        track(["--help"])
+    assert "SEQ/det/det.txt" in " ".join(capsys.readouterr().out.split())
+
+
+def test_a_run_without_video_removes_the_video_of_the_run_before(tmp_path, quick_plot):
+    source = write_images(tmp_path / "frames")
+    boxes = tmp_path / "boxes.csv"
+    boxes.write_text("1,21,11,10,20\n")
+    out = tmp_path / "out"
+    argv = [str(source), "--init", str(boxes), "--out", str(out), "--particles", "10", "--no-progress"]
+    assert track(argv) == 0
+    assert (out / "annotated.avi").is_file()
+    (out / "my_notes.txt").write_text("mine")
+    assert track([*argv, "--no-video"]) == 0
+    assert {p.name for p in out.iterdir()} == {"tracks.txt", "diagnostics.csv", "diagnostics.png", "summary.json",
+                                               "my_notes.txt"}
