@@ -338,6 +338,32 @@ def test_read_mot_missing_empty_and_directory(tmp_path, mot_file):
         read_mot(binary)
 
 
+def test_read_mot_accepts_an_empty_tracks_file_when_asked(mot_file):
+    for text in ("", "\n  \n"):
+        rows = read_mot(mot_file(text, name="tracks.txt"), allow_empty=True)
+        assert rows.shape == (0, len(motfiles.MOT_COLUMNS)) and rows.dtype == np.float64
+    with pytest.raises(TrackFileError, match="line 1"):
+        read_mot(mot_file("1,1,oops,2,3,4\n"), allow_empty=True)
+
+
+def test_a_mot17_ground_truth_from_write_gt_reads_back_and_scores(tmp_path):
+    from plugins.video_tracking import scenes
+
+    scene = scenes.render(scenes.crossing(0))
+    path = tmp_path / "gt.txt"
+    scenes.write_gt(path, scene.ground_truth, visibility=scene.visibility)
+    lines = path.read_text().splitlines()
+    assert lines[0] == "1,1,97,129,18,52,1,1,1" and all(line.count(",") == 8 for line in lines)
+    visibility = np.array([float(line.rsplit(",", 1)[1]) for line in lines])
+    np.testing.assert_allclose(visibility, scene.visibility, atol=5e-7)
+    rows = read_mot(path)
+    np.testing.assert_array_equal(rows, scene.ground_truth[:, :7])
+    scores = evaluate(rows, scene.ground_truth)
+    assert scores.mota == 1.0 and scores.idf1 == 1.0 and scores.num_objects == len(scene.ground_truth)
+    with pytest.raises(TrackingError, match="one value in \\[0, 1\\] per row"):
+        scenes.write_gt(path, scene.ground_truth, visibility=scene.visibility[:-1])
+
+
 def test_errors_belong_to_the_belief_family():
     assert issubclass(TrackFileError, TrackingError)
     assert issubclass(TrackingError, BeliefError) and issubclass(TrackingError, ValueError)
@@ -400,6 +426,24 @@ def test_belief_cli_runs_eval_through_the_entry_point(files, monkeypatch, capsys
 
     assert cli.main(["eval", str(tmp_path / "absent.txt"), gt]) == 1
     assert "no such file" in capsys.readouterr().err
+
+
+def test_belief_eval_scores_an_empty_tracks_file_as_missing_every_box(files, capsys, tmp_path):
+    _, gt, _ = files
+    empty = tmp_path / "nobody_tracks.txt"
+    empty.write_text("")
+    args = parse(["eval", str(empty), gt, "--json"])
+    assert args.func(args) == 0
+    scores = json.loads(capsys.readouterr().out)
+    assert scores["mota"] == 0.0 and scores["idf1"] == 0.0 and scores["recall"] == 0.0
+    assert scores["matched_pairs"] == 0 and scores["num_predictions"] == 0
+    assert scores["false_negatives"] == scores["num_objects"] > 0 and scores["motp"] is None
+    args = parse(["eval", str(empty), gt])
+    assert args.func(args) == 0
+    assert "MOTA                        0.0000" in capsys.readouterr().out
+    args = parse(["eval", gt, str(empty)])  # an empty ground truth is still refused
+    with pytest.raises(TrackFileError, match="empty"):
+        args.func(args)
 
 
 # -- recorded data -----------------------------------------------------------------------------------
