@@ -20,7 +20,7 @@ from belief.errors import BeliefError
 from plugins.video_tracking import checks
 from plugins.video_tracking.adaptive import AdaptiveConfig
 from plugins.video_tracking.background import BackgroundConfig
-from plugins.video_tracking.cues import CUES, ColourConfig, EdgeConfig, LocationConfig
+from plugins.video_tracking.cues import CUES, ColourConfig, DetectionConfig, EdgeConfig, LocationConfig
 from plugins.video_tracking.errors import TrackingError, UnknownCueError
 from plugins.video_tracking.fusion import MASSES, WEIGHTS, FusionConfig
 from plugins.video_tracking.initiation import InitiationConfig
@@ -88,8 +88,10 @@ class TrackerConfig:
         the fused cues (with ``rule``, whatever the strategy): ``"mass"`` the mass on target
         intersections and on ∅ (the non-consensus mass of SPEC B.3); ``"r"`` the
         inconsistency R of W (10) between the first two cues.
-    location, colour, foreground, edges : LocationConfig, ColourConfig, ColourConfig, EdgeConfig
-        Settings of the location, colour, foreground-masked colour and edge cues.
+    location, colour, foreground, edges, detections : settings dataclasses
+        Settings of the location (``LocationConfig``), colour and foreground-masked colour
+        (``ColourConfig``), edge (``EdgeConfig``) and detections (``DetectionConfig``) cues;
+        the detections cue reads a detector's boxes, given to the tracker frame by frame.
     background : BackgroundConfig
         The background model of the foreground cue and of the automatic initiation.
     warm_up : int
@@ -123,7 +125,7 @@ class TrackerConfig:
     >>> TrackerConfig(cues=("colour", "sound"))
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.UnknownCueError: unknown cue 'sound'; known cues: colour, location, foreground, edges
+    plugins.video_tracking.errors.UnknownCueError: unknown cue 'sound'; known cues: colour, location, foreground, edges, detections
     """
 
     particles: int = 100
@@ -145,6 +147,7 @@ class TrackerConfig:
     colour: ColourConfig = field(default_factory=ColourConfig)
     foreground: ColourConfig = field(default_factory=ColourConfig)
     edges: EdgeConfig = field(default_factory=EdgeConfig)
+    detections: DetectionConfig = field(default_factory=DetectionConfig)
     background: BackgroundConfig = field(default_factory=BackgroundConfig)
     warm_up: int = 0
     initiation: InitiationConfig | None = None
@@ -177,7 +180,8 @@ class TrackerConfig:
         object.__setattr__(self, "init_sigma", checks.number("TrackerConfig.init_sigma", self.init_sigma,
                                                              minimum=0.0))
         for name, kind in (("motion", MotionConfig), ("location", LocationConfig), ("colour", ColourConfig),
-                           ("foreground", ColourConfig), ("edges", EdgeConfig), ("background", BackgroundConfig),
+                           ("foreground", ColourConfig), ("edges", EdgeConfig), ("detections", DetectionConfig),
+                           ("background", BackgroundConfig),
                            ("adaptive_fusion", AdaptiveConfig)):
             checks.instance(f"TrackerConfig.{name}", getattr(self, name), kind)
         checks.choice("TrackerConfig.kappa", self.kappa, KAPPAS)
@@ -240,7 +244,7 @@ class TrackerConfig:
     def cue_config(self, name: str):
         """The settings object of cue ``name``."""
         return {"location": self.location, "colour": self.colour, "foreground": self.foreground,
-                "edges": self.edges}[name]
+                "edges": self.edges, "detections": self.detections}[name]
 
     @property
     def uses_background(self) -> bool:

@@ -280,21 +280,42 @@ class InitiationConfig:
         n_dis, the number of consecutive frames a track must lie in the border zone (or
         outside the image) with too little foreground before it ends (default 3).
     exit_foreground : float
-        F below which a track box counts as having lost its target (default 0.1).
+        Without a detector, a track box with at least this foreground fraction F still
+        counts as supported (default 0.1).
     lost_frames : int or None
-        A track whose foreground fraction stays below ``exit_foreground`` for this many
-        consecutive frames ends even away from the border (default 25); None disables
-        the rule.
+        A track unsupported (no candidate, and without a detector too little foreground)
+        for this many consecutive frames is lost: no longer output, and remembered for
+        ``memory`` frames so that it can take back its id (default 25); None never loses
+        a track.
+    coast_frames : int
+        A track is output while it has been unsupported for at most this many frames
+        (default 2); after that it is still followed, and output again once a candidate
+        supports it, until ``lost_frames``.
     first_frame : bool
-        Whether every blob of the first frame given to :meth:`Initiator.update` starts a
-        track at once, anywhere in the image (L's module 2; default True).
+        Whether every free candidate of the first frame starts a track at once, anywhere
+        in the image (L's module 2; default True).
     duplicate_iou : float
         Two tracks whose boxes overlap with at least this IoU follow the same person ...
     duplicate_frames : int or None
         ... and when they do so for this many consecutive frames, the younger one (the
         larger id) ends (default 0.5 and 15 frames, longer than two people take to cross);
         None disables the rule.
-
+    anywhere : bool
+        Chains of candidates may start anywhere in the image (default True: people appear
+        from doors and behind obstacles, and detections are seen everywhere); False keeps
+        SPEC B.4's rule that a new target enters at the image border.
+    match_iou : float
+        The gate of the one-to-one assignment of candidates to tracks, and of a chain to
+        the next frame's candidate: pairs overlapping less never match (default 0.3).
+    memory : int
+        Frames a lost track is remembered (default 50).
+    reid_similarity : float
+        A newborn track whose colour template has at least this Bhattacharyya coefficient
+        with a remembered lost track's (and that is near enough to where it was lost) takes
+        back that track's id (default 0.85).
+    size_smoothing : float
+        Weight in (0, 1] of a supporting candidate's size in a track's box size (an
+        exponential moving average; default 0.3).
     Raises
     ------
     TrackingError
@@ -318,9 +339,16 @@ class InitiationConfig:
     exit_frames: int = 3
     exit_foreground: float = 0.1
     lost_frames: int | None = 25
+    coast_frames: int = 2
     first_frame: bool = True
     duplicate_iou: float = 0.5
     duplicate_frames: int | None = 15
+    anywhere: bool = True
+    match_iou: float = 0.3
+    memory: int = 50
+    reid_similarity: float = 0.85
+    size_smoothing: float = 0.3
+    centre_gain: float = 0.5
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "border", _integer("border", self.border, 0))
@@ -337,6 +365,14 @@ class InitiationConfig:
         if self.duplicate_frames is not None:
             object.__setattr__(self, "duplicate_frames", _integer("duplicate_frames", self.duplicate_frames, 1))
         object.__setattr__(self, "first_frame", checks.flag("InitiationConfig.first_frame", self.first_frame))
+        object.__setattr__(self, "coast_frames", _integer("coast_frames", self.coast_frames, 0))
+        object.__setattr__(self, "anywhere", checks.flag("InitiationConfig.anywhere", self.anywhere))
+        object.__setattr__(self, "match_iou", _fraction("match_iou", self.match_iou, allow_zero=False))
+        object.__setattr__(self, "memory", _integer("memory", self.memory, 0))
+        object.__setattr__(self, "reid_similarity",
+                           _fraction("reid_similarity", self.reid_similarity, allow_zero=False))
+        object.__setattr__(self, "size_smoothing", _fraction("size_smoothing", self.size_smoothing, allow_zero=False))
+        object.__setattr__(self, "centre_gain", _fraction("centre_gain", self.centre_gain, allow_zero=True))
 
     def min_area_pixels(self, image_shape: tuple[int, int]) -> float:
         """The smallest blob area in pixels, ``min_area · W · H``, for an image of shape (H, W)."""

@@ -38,12 +38,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from plugins.video_tracking.appearance import AppearanceFollower
+from plugins.video_tracking.association import assign
 from plugins.video_tracking.background import BackgroundModel
 from plugins.video_tracking.config import TrackerConfig
 from plugins.video_tracking.cues import CUES, Observation
 from plugins.video_tracking.detections import Detections
 from plugins.video_tracking.errors import InitError, TrackingError
-from plugins.video_tracking.initiation import InitPlan
+from plugins.video_tracking.initiation import InitPlan, foreground_blobs
 from plugins.video_tracking.particles import CX, CY, LOG_SCALE, VX, VY, ConstantVelocity, ParticleSet, adaptive_count
 from plugins.video_tracking.tracks import Estimate, TrackManager
 from plugins.video_tracking.weighting import BELIEF_COLUMNS, Evidence, Weighing, make_weighting
@@ -219,6 +220,8 @@ class Tracker:
             if config.follows_appearance else None
         self.tracks = TrackManager(config, init, self.cues, rng)
         self.diagnostic_columns = diagnostic_columns(config)
+        self._reads_candidates = "detections" in config.cues
+        self._gate = config.initiation.match_iou if config.initiation is not None else 0.3
         self._motion: ConstantVelocity | None = None
         self._image_shape: tuple[int, int] | None = None
 
@@ -271,30 +274,62 @@ class Tracker:
         """
         started = time.perf_counter()
         image = self._begin(frame, image)
+        detector = detections is not None
+        if detector:
+            detections = self._checked_detections(frame, detections)
         foreground = self.background.apply(image) if self.background is not None else None
+        births_allowed = not getattr(self.background, "lighting_change", False)
         self.tracks.end_planned(frame)
+        candidates = self._candidates(detections, foreground)
+        assigned = None
         estimates: list[Estimate] = []
         diagnostics = FrameDiagnostics(self.diagnostic_columns, (), np.zeros((0, len(self.diagnostic_columns))))
         if self.targets:
+            if candidates is not None:
+                assigned = assign(self.tracks.predicted_boxes(self.config.motion.dt), candidates, self._gate)
             previous = np.concatenate([t.particles.states[:, [CX, CY]] for t in self.targets])
             moved = self._predict()
             obs = Observation(image, foreground, centres=self._location_centres(),
-                              sizes=np.array([t.size for t in self.targets]), previous_particles=previous)
+                              sizes=np.array([t.size for t in self.targets]), previous_particles=previous,
+                              detections=candidates if self._reads_candidates else None,
+                              assigned=assigned if self._reads_candidates else None)
             evidence = self._score(obs, moved)
             weighing = self.weighting.weigh(evidence)
             weighted = self._estimate(moved, weighing, evidence)
             records = self._diagnose(obs, evidence, weighing, weighted)
             self._resample(weighted, records)
+            if assigned is not None:
+                self.tracks.follow_candidates(assigned, candidates)
             estimates = [Estimate(frame, t.id, t.estimate.copy(), t.box()) for t in self.targets]
             diagnostics = FrameDiagnostics(self.diagnostic_columns, tuple(t.id for t in self.targets),
                                            np.column_stack([records[c] for c in self.diagnostic_columns]))
-        estimates = self.tracks.births_and_deaths(frame, image, foreground, estimates)
+        estimates = self.tracks.births_and_deaths(frame, image, foreground, estimates, candidates, assigned,
+                                                  detector=detector, births_allowed=births_allowed)
         alive = {e.id for e in estimates}
         if any(i not in alive for i in diagnostics.ids):
             keep = [k for k, i in enumerate(diagnostics.ids) if i in alive]
             diagnostics = FrameDiagnostics(diagnostics.columns, tuple(diagnostics.ids[k] for k in keep),
                                            diagnostics.values[keep])
         return FrameResult(frame, tuple(estimates), diagnostics, time.perf_counter() - started)
+
+    def _checked_detections(self, frame: int, detections) -> np.ndarray:
+        """A frame's detections at the boundary: a finite (n, 5) array with positive sizes and scores in [0, 1]."""
+        rows = np.asarray(detections, dtype=np.float64)
+        if rows.ndim != 2 or rows.shape[1] != 5 or not np.isfinite(rows).all() or (rows[:, 2:4] <= 0).any() \
+                or (rows[:, 4] < 0).any() or (rows[:, 4] > 1).any():
+            raise TrackingError(f"frame {frame}: detections must be a finite (n, 5) array x, y, w, h, score with "
+                                f"positive sizes and scores in [0, 1], got shape {rows.shape}")
+        return rows
+
+    def _candidates(self, detections: np.ndarray | None, foreground: np.ndarray | None) -> np.ndarray | None:
+        """The frame's candidate boxes ``x, y, w, h, score``: the detections, else the foreground's person blobs."""
+        if detections is not None:
+            return detections
+        if self.tracks.lifecycle is None or foreground is None:
+            return None
+        initiation = self.config.initiation
+        blobs = foreground_blobs(foreground, initiation.min_area_pixels(foreground.shape), initiation.opening)
+        return np.column_stack([blobs, np.ones(len(blobs))])
 
     def _begin(self, frame: int, image: np.ndarray) -> np.ndarray:
         """Check a frame at the boundary; the first one fixes the image size of the run."""
@@ -319,7 +354,7 @@ class Tracker:
             particles = target.particles.propagate(self._motion, self.rng)
             # Without a fitted model every target keeps its birth size: a random walk on the
             # scale would drift, since the foreground-masked colour rewards shrinking windows.
-            scale = 0.0 if target.growing or perspective is None else \
+            scale = 0.0 if perspective is None else \
                 perspective.log_scale(particles.states[:, CY], target.birth_cy)
             moved.append(particles.with_column(LOG_SCALE, scale))
         return moved

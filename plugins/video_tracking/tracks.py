@@ -21,12 +21,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from plugins.video_tracking.boxes import check_boxes, iou
+from plugins.video_tracking.boxes import check_boxes
 from plugins.video_tracking.config import TrackerConfig
-from plugins.video_tracking.cues import AppearanceCue
+from plugins.video_tracking.association import UNASSIGNED
+from plugins.video_tracking.cues import AppearanceCue, bhattacharyya
 from plugins.video_tracking.errors import InitError, TrackingError
-from plugins.video_tracking.initiation import InitPlan, Initiator, TargetInit
-from plugins.video_tracking.particles import CX, CY, LOG_SCALE, ParticleSet, initialise
+from plugins.video_tracking.initiation import InitPlan, TargetInit
+from plugins.video_tracking.lifecycle import Lifecycle
+from plugins.video_tracking.particles import CX, CY, LOG_SCALE, VX, VY, ParticleSet, initialise
 from plugins.video_tracking.perspective import PerspectiveScale
 
 __all__ = ["Estimate", "Target", "TrackManager"]
@@ -75,8 +77,6 @@ class Target:
         The estimated state of the last frame (W (6)).
     birth_cy : float
         Centre row of the birth box, the reference row of the perspective scale.
-    growing : bool
-        Born in part at the image border: its size follows its blob until all of it is in view.
     """
 
     id: int
@@ -85,7 +85,6 @@ class Target:
     particles: ParticleSet
     estimate: np.ndarray
     birth_cy: float = 0.0
-    growing: bool = False
 
     def box(self, state: np.ndarray | None = None) -> tuple[float, float, float, float]:
         """The window ``x, y, w, h`` of ``state`` (default: the estimate), in 0-based pixels."""
@@ -114,8 +113,11 @@ class TrackManager:
     perspective : PerspectiveScale or None
         The window-size model fitted to the planned birth boxes (None until two boxes on
         different rows allow a fit).
-    initiator : Initiator or None
-        The automatic initiation, made at the first frame (it needs the image size).
+    lifecycle : Lifecycle or None
+        The automatic tracks' births, losses and deaths, made at the first frame (it needs
+        the image size).
+    lost : dict of int to lost target
+        The lost targets remembered for re-identification, by id.
     """
 
     def __init__(self, config: TrackerConfig, plan: InitPlan | None, cues: list, rng: np.random.Generator) -> None:
@@ -125,10 +127,14 @@ class TrackManager:
         self.rng = rng
         self.targets: list[Target] = []
         self.perspective: PerspectiveScale | None = None
-        self.initiator: Initiator | None = None
+        self.lifecycle: Lifecycle | None = None
+        self.lost: dict[int, _LostTarget] = {}
+        self._last_seen: dict[int, tuple[int, np.ndarray]] = {}
+        self._frame = 0
         self._image_shape: tuple[int, int] | None = None
         self._birth_boxes: list[tuple[float, float, float, float]] = []
         planned = [t.id for t in plan.targets] if plan is not None else []
+        self._planned = set(planned)
         self._next_id = max(planned, default=0) + 1
         self._appearance = [cue for cue in cues if isinstance(cue, AppearanceCue)]
 
@@ -141,15 +147,14 @@ class TrackManager:
         """Get ready for frames of ``image_shape`` (H, W): the automatic initiation needs it."""
         self._image_shape = image_shape
         if self.config.initiation is not None:
-            self.initiator = Initiator(self.config.initiation, image_shape)
+            self.lifecycle = Lifecycle(self.config.initiation, image_shape)
 
     # -- births and deaths --------------------------------------------------------------------
     def add(self, birth: TargetInit, frame: int, image: np.ndarray, foreground: np.ndarray | None = None,
-            growing: bool = False, planned: bool = True) -> Estimate:
+            planned: bool = True) -> Estimate:
         """Start tracking ``birth`` at its box in ``image`` (W-S1); returns its first estimate.
 
-        ``growing`` marks a target seen only in part, entering at the image border (needs
-        the automatic initiation, which finds the blobs).  A target that is not ``planned``
+        A target that is not ``planned``
         (found by the initiation) does not enter the fit of the perspective model: blob
         boxes are too rough (merged groups, shadows, missing legs) to fit the ground plane on.
         """
@@ -165,7 +170,7 @@ class TrackManager:
         states = initialise(centre, self.config.particles, self.rng, sigma_pos=self.config.init_sigma)
         estimate = np.array([centre[0], centre[1], 0.0, 0.0, 0.0])
         self.targets.append(Target(birth.id, birth.last_frame, np.array([w, h]), ParticleSet(states), estimate,
-                                   birth_cy=centre[1], growing=bool(growing) and self.config.initiation is not None))
+                                   birth_cy=centre[1]))
         if planned:
             self._birth_boxes.append(birth.box)
             self.perspective = PerspectiveScale.fit(self._birth_boxes)
@@ -186,52 +191,144 @@ class TrackManager:
         for target in [t for t in self.targets if t.last_frame is not None and t.last_frame < frame]:
             self.remove(target.id)
 
-    def births_and_deaths(self, frame: int, image: np.ndarray, foreground: np.ndarray | None,
-                          estimates: list[Estimate]) -> list[Estimate]:
-        """Planned births, then the automatic initiation's deaths and births; returns the frame's estimates.
+    def predicted_boxes(self, dt: float = 1.0) -> np.ndarray:
+        """Each live target's box moved on by its estimated velocity for ``dt`` frames, shape (τ, 4)."""
+        if not self.targets:
+            return np.zeros((0, 4))
+        boxes = np.array([t.box() for t in self.targets])
+        boxes[:, :2] += dt * np.array([t.estimate[[VX, VY]] for t in self.targets])
+        return boxes
 
-        The estimates of tracks that end here are dropped; those of newborn targets are
-        appended (their birth boxes).
+    def births_and_deaths(self, frame: int, image: np.ndarray, foreground: np.ndarray | None,
+                          estimates: list[Estimate], candidates: np.ndarray | None = None,
+                          assigned: np.ndarray | None = None, detector: bool = False,
+                          births_allowed: bool = True) -> list[Estimate]:
+        """Planned births, then the automatic tracks' losses, deaths and births; returns the frame's estimates.
+
+        Parameters
+        ----------
+        frame : int
+        image : ndarray of uint8, shape (H, W, 3)
+        foreground : ndarray of bool, shape (H, W), or None
+        estimates : list of Estimate
+            The live targets' estimates of this frame, in target order.
+        candidates : ndarray, shape (n, 5), optional
+            The frame's candidate boxes ``x, y, w, h, score`` (detections, or person blobs).
+        assigned : ndarray of int, shape (τ,), optional
+            The candidate each live target took (−1: none).
+        detector : bool
+            Whether the candidates come from a detector (else a track box with enough
+            foreground counts as supported).
+        births_allowed : bool
+            False when this frame's candidates must not start tracks (a lighting change).
+
+        The estimates of tracks that end or are lost here are dropped; those of newborn
+        targets are appended (their birth boxes).
         """
+        self._frame = frame
+        # The lifecycle reads the targets that went through this frame's filter; planned
+        # births join it from the next frame.
+        tracked = len(estimates)
         estimates = list(estimates)
         for birth in self.plan.births(frame) if self.plan is not None else []:
             estimates.append(self.add(birth, frame, image, foreground))
-        if self.initiator is None:
+        if self.lifecycle is None:
             return estimates
-        births, deaths = self.initiator.update(foreground, {e.id: e.box for e in estimates})
-        for target_id in deaths:
+        candidates = np.zeros((0, 5)) if candidates is None else np.asarray(candidates, dtype=np.float64)
+        assigned = np.full(tracked, UNASSIGNED, dtype=np.intp) if assigned is None \
+            else np.asarray(assigned, dtype=np.intp)
+        ids = [e.id for e in estimates[:tracked]]
+        boxes = np.array([e.box for e in estimates[:tracked]]).reshape(-1, 4)
+        outcome = self.lifecycle.update(ids, boxes, assigned, candidates,
+                                        None if detector else foreground, births_allowed)
+        for target_id in outcome.lost:
+            self._remember(target_id, frame)
+        for target_id in outcome.lost + outcome.ended:
             self.remove(target_id)
-        ended = set(deaths)
-        estimates = [e for e in estimates if e.id not in ended]
-        self._grow(image, foreground)
-        partial = self.initiator.touches_border(births) if births else []
-        for box, growing in zip(births, partial):
+            self._last_seen.pop(target_id, None)
+        gone = set(outcome.lost) | set(outcome.ended)
+        coast = self.config.initiation.coast_frames
+        # A track unsupported for longer than it may coast is still followed, but not output;
+        # the targets the user gave are always output.
+        estimates = [e for e in estimates if e.id not in gone and (e.id in self._planned
+                                                                   or self.lifecycle.unsupported(e.id) <= coast)]
+        self._forget(frame)
+        for box in outcome.births:
             born = TargetInit(self._next_id, frame, None, tuple(float(v) for v in box))
-            estimates.append(self.add(born, frame, image, foreground, growing=growing, planned=False))
+            estimate = self.add(born, frame, image, foreground, planned=False)
+            estimates.append(self._reidentify(estimate, frame))
         return estimates
 
-    def _grow(self, image: np.ndarray, foreground: np.ndarray) -> None:
-        """Targets entering the image take the size and centre of their blob until all of it is in view."""
-        blobs = self.initiator.blobs
-        if not len(blobs):
+    def follow_candidates(self, assigned: np.ndarray, candidates: np.ndarray) -> None:
+        """Targets that took a candidate move towards it: size by ``size_smoothing``, centre by ``centre_gain``.
+
+        The centre moves by the gain times the candidate's score, particles and estimate
+        alike, so that the next frame starts from the corrected position.
+        """
+        initiation = self.config.initiation
+        if initiation is None:
             return
-        for index, target in enumerate(self.targets):
-            if not target.growing:
+        rate, gain = initiation.size_smoothing, initiation.centre_gain
+        for target, k in zip(self.targets, assigned):
+            if k < 0:
                 continue
-            overlap = iou(np.array([target.box()]), blobs)[0]
-            best = int(np.argmax(overlap))
-            if overlap[best] <= 0:
+            x, y, w, h, score = candidates[k]
+            self._last_seen[target.id] = (self._frame, np.array([x, y, w, h]))
+            target.size = (1.0 - rate) * target.size + rate * np.array([w, h])
+            if gain > 0:
+                shift = np.zeros(target.particles.states.shape[1])
+                shift[[CX, CY]] = gain * score * (np.array([x + w / 2.0, y + h / 2.0]) - target.estimate[[CX, CY]])
+                target.particles = ParticleSet(target.particles.states + shift, target.particles.log_weights)
+                target.estimate = target.estimate + shift
+
+    def _remember(self, target_id: int, frame: int) -> None:
+        """Keep what a lost target looked like, so that a newborn target like it takes back its id."""
+        index = next(k for k, t in enumerate(self.targets) if t.id == target_id)
+        target = self.targets[index]
+        templates = [np.array(cue.templates[index]) for cue in self._appearance]
+        # Where a candidate last supported the target: after that the particles only guessed.
+        seen, box = self._last_seen.pop(target_id, (frame, np.array(target.box())))
+        self.lost[target_id] = _LostTarget(target_id, seen, box, target.estimate[[VX, VY]].copy(), templates)
+
+    def _forget(self, frame: int) -> None:
+        memory = self.config.initiation.memory
+        for target_id in [i for i, lost in self.lost.items() if frame - lost.frame > memory]:
+            del self.lost[target_id]
+
+    def _reidentify(self, estimate: Estimate, frame: int) -> Estimate:
+        """A newborn target that looks like a remembered lost one, near where it was lost, takes its id."""
+        if not self.lost or not self._appearance:
+            return estimate
+        target = self.targets[-1]
+        config = self.config.initiation
+        best, best_similarity = None, config.reid_similarity
+        centre = np.array(estimate.state[[CX, CY]])
+        for lost in self.lost.values():
+            gap = frame - lost.frame
+            x, y, w, h = lost.box
+            expected = np.array([x + w / 2.0, y + h / 2.0]) + gap * lost.velocity
+            # Someone out of sight may have turned or stopped: the reach grows with the time
+            # gone, from one box height.
+            reach = h * (1.0 + gap / 10.0)
+            if np.hypot(*(centre - expected)) > reach:
                 continue
-            x, y, w, h = blobs[best]
-            centre = np.array([x + w / 2.0, y + h / 2.0])
-            shift = np.zeros(target.particles.states.shape[1])
-            shift[[CX, CY]] = centre - target.estimate[[CX, CY]]
-            target.particles = ParticleSet(target.particles.states + shift, target.particles.log_weights)
-            target.estimate = target.estimate + shift
-            target.size = np.array([w, h])
-            target.birth_cy = float(centre[1])
-            if self.initiator.touches_border(blobs[best])[0]:
-                continue
-            target.growing = False
-            for cue in self._appearance:
-                cue.rebuild_template(index, image, (x, y, w, h), foreground)
+            similarity = min(float(bhattacharyya(cue.templates[-1], lost.templates[k]))
+                             for k, cue in enumerate(self._appearance))
+            if similarity >= best_similarity:
+                best, best_similarity = lost.id, similarity
+        if best is None:
+            return estimate
+        del self.lost[best]
+        target.id = best
+        return Estimate(estimate.frame, best, estimate.state, estimate.box)
+
+
+@dataclass(frozen=True)
+class _LostTarget:
+    """What a lost target looked like, and where and when it was last seen."""
+
+    id: int
+    frame: int
+    box: np.ndarray
+    velocity: np.ndarray
+    templates: list

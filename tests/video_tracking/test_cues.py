@@ -383,7 +383,7 @@ def test_cue_outputs_feed_the_fusion():
 
 
 def test_registry_builds_every_cue():
-    assert set(CUES) == {"colour", "location", "foreground", "edges"}
+    assert set(CUES) == {"colour", "location", "foreground", "edges", "detections"}
     assert make_cue("colour", bins=4, sigma=0.2).config == ColourConfig(bins=4, sigma=0.2)
     assert isinstance(make_cue("foreground"), ForegroundColourCue)
     assert isinstance(make_cue("colour"), AppearanceCue) and not isinstance(make_cue("location"), AppearanceCue)

@@ -1,0 +1,215 @@
+"""Births, losses and deaths of automatic tracks, from each frame's candidate boxes.
+
+A frame's *candidates* are a detector's boxes, or the person blobs of the foreground mask
+when there is no detector.  Before the cues score the particles, every track takes at most
+one candidate (:func:`~plugins.video_tracking.association.assign`); :class:`Lifecycle`
+then reads the outcome:
+
+* A track that took a candidate is *supported*; so is, without a detector, a track whose
+  box is still mostly foreground (a person standing among others, whose blob merged with
+  theirs).  A track unsupported for ``lost_frames`` consecutive frames is *lost*: it is no
+  longer output, and the tracker keeps what it looked like for ``memory`` frames.
+* A track whose centre is in the border zone (or outside the image) while unsupported for
+  ``exit_frames`` frames has left the image and ends.  Of two tracks that overlap with IoU
+  at least ``duplicate_iou`` for ``duplicate_frames`` frames, the younger ends.
+* A candidate that no track took and that no track box covers starts a *chain*; a chain
+  continues with the best-overlapping free candidate of the next frame (IoU at least
+  ``match_iou``), and one that lasts ``appear_frames`` frames is born.  Chains start
+  anywhere in the image (``anywhere``) or only in the border zone (SPEC B.4 as printed).
+  On the first frame every free candidate is born at once (``first_frame``).
+
+Taking back a lost id by appearance needs the cues' templates, which the
+:class:`~plugins.video_tracking.tracks.TrackManager` holds; :class:`Lifecycle` only keeps
+the counters and the chains.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from plugins.video_tracking.association import UNASSIGNED
+from plugins.video_tracking.boxes import box_centres, intersections, iou
+from plugins.video_tracking.initiation import COVERED_FRACTION, InitiationConfig, foreground_fraction
+
+__all__ = ["Lifecycle", "FrameOutcome"]
+
+
+class FrameOutcome:
+    """What :meth:`Lifecycle.update` decided for one frame.
+
+    Attributes
+    ----------
+    births : ndarray, shape (k, 4)
+        Boxes of the chains that are born.
+    lost : list of int
+        Ids of the tracks that are lost this frame (no longer output; remembered).
+    ended : list of int
+        Ids of the tracks that end this frame (left the image, or duplicates).
+    """
+
+    __slots__ = ("births", "lost", "ended")
+
+    def __init__(self, births: np.ndarray, lost: list[int], ended: list[int]) -> None:
+        self.births, self.lost, self.ended = births, lost, ended
+
+    def __repr__(self) -> str:
+        return f"FrameOutcome(births={self.births.tolist()}, lost={self.lost}, ended={self.ended})"
+
+
+class Lifecycle:
+    """The counters of the live tracks and the chains of candidates that may become tracks.
+
+    Parameters
+    ----------
+    config : InitiationConfig
+    image_shape : (int, int)
+        (H, W) of the frames.
+
+    Examples
+    --------
+    A candidate seen on three consecutive frames is born; the track then misses its
+    candidate and is lost after ``lost_frames`` frames:
+
+    >>> life = Lifecycle(InitiationConfig(appear_frames=3, lost_frames=2, first_frame=False), (100, 100))
+    >>> none = np.zeros(0, np.intp)
+    >>> for x in (40, 41, 42):
+    ...     outcome = life.update([], np.zeros((0, 4)), none, np.array([[x, 30, 10, 20, 0.9]]))
+    >>> outcome.births.tolist()
+    [[42.0, 30.0, 10.0, 20.0]]
+    >>> [life.update([1], np.array([[43.0, 30, 10, 20]]), np.array([-1]), np.zeros((0, 5))).lost for _ in range(2)]
+    [[], [1]]
+    """
+
+    def __init__(self, config: InitiationConfig, image_shape: tuple[int, int]) -> None:
+        self.config = config
+        self.image_shape = (int(image_shape[0]), int(image_shape[1]))
+        self._frames = 0
+        self._chains = np.zeros((0, 4))
+        self._chain_lengths = np.zeros(0, dtype=np.intp)
+        self._unsupported: dict[int, int] = {}
+        self._leaving: dict[int, int] = {}
+        self._twins: dict[int, int] = {}
+
+    @property
+    def chains(self) -> list[tuple[tuple[float, ...], int]]:
+        """The chains after the last frame: ``(last box, frames seen)``."""
+        return [(tuple(float(v) for v in box), int(n)) for box, n in zip(self._chains, self._chain_lengths)]
+
+    def unsupported(self, track_id: int) -> int:
+        """Consecutive frames that track ``track_id`` has gone without support."""
+        return self._unsupported.get(track_id, 0)
+
+    def in_border_zone(self, boxes: np.ndarray) -> np.ndarray:
+        """Whether any pixel of each box ``(x, y, w, h)`` lies within ``border`` px of an image edge."""
+        height, width = self.image_shape
+        b = self.config.border
+        boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+        return ((boxes[:, 0] < b) | (boxes[:, 1] < b)
+                | (boxes[:, 0] + boxes[:, 2] > width - b) | (boxes[:, 1] + boxes[:, 3] > height - b))
+
+    def update(self, ids: list[int], boxes: np.ndarray, assigned: np.ndarray, candidates: np.ndarray,
+               foreground: np.ndarray | None = None, births_allowed: bool = True) -> FrameOutcome:
+        """Read one frame.
+
+        Parameters
+        ----------
+        ids : list of int
+            The live tracks, in increasing age (an older track comes first).
+        boxes : ndarray, shape (τ, 4)
+            Their boxes in this frame.
+        assigned : ndarray of int, shape (τ,)
+            The candidate each track took (−1: none).
+        candidates : ndarray, shape (n, 4) or (n, 5)
+            The frame's candidate boxes (a score column is ignored here).
+        foreground : ndarray of bool, shape (H, W), optional
+            Without a detector, the foreground mask: a track box whose foreground fraction
+            is at least ``exit_foreground`` counts as supported.
+        births_allowed : bool
+            False on frames whose candidates cannot be trusted (a lighting change): no chain
+            grows or is born.
+
+        Returns
+        -------
+        FrameOutcome
+        """
+        config = self.config
+        first = self._frames == 0
+        self._frames += 1
+        boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+        candidates = np.asarray(candidates, dtype=np.float64).reshape(-1, candidates.shape[1] if
+                                                                       np.ndim(candidates) == 2 else 4)[:, :4]
+        supported = np.asarray(assigned) != UNASSIGNED
+        if foreground is not None and len(boxes):
+            supported |= foreground_fraction(foreground, boxes) >= config.exit_foreground
+        lost, ended = self._track_counters(ids, boxes, supported)
+
+        taken = np.zeros(len(candidates), dtype=bool)
+        taken[np.asarray(assigned)[supported & (np.asarray(assigned) >= 0)]] = True
+        gone = set(lost) | set(ended)
+        live = np.array([track_id not in gone for track_id in ids], dtype=bool)
+        free = ~taken & ~self._covered(candidates, boxes[live])
+        if not births_allowed:
+            self._chains = np.zeros((0, 4))
+            self._chain_lengths = np.zeros(0, dtype=np.intp)
+            births = np.zeros((0, 4))
+        elif first and config.first_frame:
+            births = candidates[free]
+        else:
+            if not config.anywhere:
+                free &= self.in_border_zone(candidates)
+            births = self._grow_chains(candidates[free])
+        return FrameOutcome(births, lost, ended)
+
+    # -- steps ----------------------------------------------------------------------------------
+    def _track_counters(self, ids: list[int], boxes: np.ndarray, supported: np.ndarray) -> tuple[list[int], list[int]]:
+        config = self.config
+        height, width = self.image_shape
+        b = config.border
+        centres = box_centres(boxes) if len(boxes) else np.zeros((0, 2))
+        at_border = (centres[:, 0] < b) | (centres[:, 0] >= width - b) | (centres[:, 1] < b) \
+            | (centres[:, 1] >= height - b)
+        overlaps = iou(boxes, boxes) if len(ids) else np.zeros((0, 0))
+        duplicate = np.array([(overlaps[k, :k] >= config.duplicate_iou).any() for k in range(len(ids))], dtype=bool)
+        unsupported, leaving, twins = {}, {}, {}
+        lost, ended = [], []
+        for k, track_id in enumerate(ids):
+            missed = 0 if supported[k] else self._unsupported.get(track_id, 0) + 1
+            out = self._leaving.get(track_id, 0) + 1 if at_border[k] and not supported[k] else 0
+            twin = self._twins.get(track_id, 0) + 1 if duplicate[k] else 0
+            if out >= config.exit_frames or (config.duplicate_frames is not None
+                                             and twin >= config.duplicate_frames):
+                ended.append(track_id)
+            elif config.lost_frames is not None and missed >= config.lost_frames:
+                lost.append(track_id)
+            else:
+                unsupported[track_id], leaving[track_id], twins[track_id] = missed, out, twin
+        self._unsupported, self._leaving, self._twins = unsupported, leaving, twins
+        return lost, ended
+
+    def _covered(self, candidates: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+        """Whether each candidate overlaps a track box enough to belong to it (``max_iou``, or mostly inside)."""
+        if len(boxes) == 0 or len(candidates) == 0:
+            return np.zeros(len(candidates), dtype=bool)
+        overlap = iou(candidates, boxes) >= self.config.max_iou
+        inside = intersections(candidates, boxes) >= COVERED_FRACTION * (candidates[:, 2] * candidates[:, 3])[:, None]
+        return (overlap | inside).any(axis=1)
+
+    def _grow_chains(self, free: np.ndarray) -> np.ndarray:
+        """Continue the chains with this frame's free candidates; return the boxes of those born."""
+        lengths = np.ones(len(free), dtype=np.intp)
+        previous, previous_lengths = self._chains, self._chain_lengths
+        if len(free) and len(previous):
+            overlaps = iou(free, previous)
+            rows, cols = np.nonzero(overlaps >= self.config.match_iou)
+            order = np.argsort(-overlaps[rows, cols], kind="stable")
+            free_taken = np.zeros(len(free), dtype=bool)
+            previous_taken = np.zeros(len(previous), dtype=bool)
+            for k in order:
+                i, j = rows[k], cols[k]
+                if not free_taken[i] and not previous_taken[j]:
+                    free_taken[i] = previous_taken[j] = True
+                    lengths[i] = previous_lengths[j] + 1
+        born = lengths >= self.config.appear_frames
+        self._chains = free[~born]
+        self._chain_lengths = lengths[~born]
+        return free[born]
