@@ -358,18 +358,23 @@ class BackgroundModel:
                 frames = [frame if abs(g - 1.0) <= _GAIN_TOLERANCE else cv2.convertScaleAbs(frame, alpha=1.0 / g)
                           for frame, g in zip(frames, gains)]
                 median = _median(frames)
-        reference = median.astype(np.float32)
         channels = 1 if median.ndim == 2 else 3
+        step = self._step
+        grid = np.stack([frame[step // 2::step, step // 2::step] for frame in frames]).astype(np.float32)
+        spread = grid - median[step // 2::step, step // 2::step].astype(np.float32)
+        spread = _squares(spread.reshape(len(frames), -1, channels))
+        noise = np.clip(float(np.median(spread)) / _CHI2_MEDIAN[channels],
+                        self._subtractor.getVarMin(), self._subtractor.getVarMax())
+        threshold = self.config.var_threshold * noise
+        background = _mode_background(frames, median, threshold)
+        reference = background.astype(np.float32)
         for frame in frames:
-            distance = _squared_distance(frame, reference)
-            noise = np.clip(float(np.median(distance[::self._step, ::self._step])) / _CHI2_MEDIAN[channels],
-                            self._subtractor.getVarMin(), self._subtractor.getVarMax())
             cleaned = frame.copy()
-            moved = distance > self.config.var_threshold * noise
-            cleaned[moved] = median[moved]
+            moved = _squared_distance(frame, reference) > threshold
+            cleaned[moved] = background[moved]
             self._learn(cleaned)
         if self._reference is None or self.frames_seen == len(frames):
-            self._reference = self._sample(median)
+            self._reference = self._sample(background)
         self._was_foreground = None
         self._mean_gain = None
         return len(frames)
@@ -493,7 +498,52 @@ def _median(frames: list[np.ndarray]) -> np.ndarray:
     return median
 
 
+def _mode_background(frames: list[np.ndarray], median: np.ndarray, threshold: float) -> np.ndarray:
+    """The colour most frames agree on at each pixel, where the median is not one that half of them share.
+
+    Where people cover a pixel in more than half the frames (two people crossing, one after
+    the other), the per-channel median is a person's colour or a mix.  There the
+    background is the mean of the largest group of frames within ``threshold`` (a squared
+    colour distance) of one of them: the background is seen in the most frames even when
+    that is less than half of them.
+    """
+    count = len(frames)
+    background = median.copy()
+    flat = background.reshape(-1, 1 if median.ndim == 2 else median.shape[2])
+    channels = flat.shape[1]
+    band = max(1, (1 << 22) // max(1, frames[0][0].size * count))
+    for top in range(0, median.shape[0], band):
+        stack = np.stack([frame[top:top + band] for frame in frames]).astype(np.int32)
+        stack = stack.reshape(count, -1, channels)
+        offset = top * median.shape[1]
+        base = flat[offset:offset + stack.shape[1]].astype(np.int32)
+        agree = (_squares(stack - base) <= threshold).sum(axis=0)
+        doubtful = np.flatnonzero(2 * agree < count)
+        # Every frame's colour is a candidate; pairwise distances, a few hundred pixels at a time.
+        for start in range(0, doubtful.size, 256):
+            pixels = doubtful[start:start + 256]
+            values = stack[:, pixels]                                    # (frames, pixels, C)
+            close = _squares(values[:, None] - values[None, :]) <= threshold
+            support = close.sum(axis=1)                                  # (candidates, pixels)
+            best = support.argmax(axis=0)
+            better = support[best, np.arange(pixels.size)] > agree[pixels]
+            members = close[best, :, np.arange(pixels.size)].T           # (frames, pixels)
+            mean = (values * members[:, :, None]).sum(axis=0) / members.sum(axis=0)[:, None]
+            chosen = offset + pixels[better]
+            flat[chosen] = np.rint(mean[better]).astype(np.uint8)
+    return background
+
+
 def _squared_distance(frame: np.ndarray, reference: np.ndarray) -> np.ndarray:
     """Squared colour distance of every pixel to the reference, (H, W) float32."""
     difference = frame.astype(np.float32) - reference
-    return difference * difference if difference.ndim == 2 else (difference * difference).sum(axis=2)
+    return difference * difference if difference.ndim == 2 else _squares(difference)
+
+
+def _squares(difference: np.ndarray) -> np.ndarray:
+    """Sum of squares over the last axis (the channels)."""
+    # Channel by channel: numpy reduces over a short last axis far more slowly.
+    total = difference[..., 0] * difference[..., 0]
+    for channel in range(1, difference.shape[-1]):
+        total += difference[..., channel] * difference[..., channel]
+    return total
