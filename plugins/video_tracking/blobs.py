@@ -71,6 +71,9 @@ _REST_HEIGHT = 0.5
 #: fraction of a person's width is no person on its own.
 _LEG_GAP, _FOOT_STEP, _NARROW_RUN = 0.3, 0.08, 0.5
 
+#: A blob at most this many times a person's width, and not too tall, is one person as it is.
+_ONE_WIDE = 1.25
+
 #: A split may move from the even cut by this fraction of a part's width, to an emptier column.
 _SPLIT_SLACK = 0.3
 
@@ -146,7 +149,7 @@ def person_boxes(mask: np.ndarray, size_model: PersonSize | None = None, *, min_
             if blob.area >= min_area_pixels:
                 boxes.extend(_shaped(blob, labels, size_model, split_width, max_height) if size_model else [blob.box])
             continue
-        person_w, person_h = (float(v) for v in size_model.expected(y + h))
+        person_w, person_h = _size(size_model, y + h)
         if h < _MIN_HEIGHT * person_h or blob.area < _MIN_FILL * person_w * person_h:
             continue
         boxes.extend(_shaped(blob, labels, size_model, split_width, max_height))
@@ -253,7 +256,7 @@ def _merge_fragments(blobs: list[_Blob], size_model: PersonSize | None) -> list[
         if size_model is None:
             ok = _stacked(a, b, union_w, union_h)
         else:
-            person_w, person_h = size_model.expected(bottom)
+            person_w, person_h = _size(size_model, bottom)
             partial = lambda box: (box[:, 3] < _PARTIAL * person_h) | (box[:, 2] < _PARTIAL * person_w)  # noqa: E731
             ok = (union_h <= _MERGED_SIZE * person_h) & (union_w <= _MERGED_SIZE * person_w) \
                 & partial(a) & partial(b)
@@ -281,21 +284,25 @@ def _shaped(blob: _Blob, labels: np.ndarray, size_model: PersonSize, split_width
             max_height: float) -> list[np.ndarray]:
     """The boxes of one blob: one per run of feet, each after the tall cut and the width split."""
     x, y, w, h = (int(v) for v in blob.box)
-    pixels = np.isin(labels[y:y + h, x:x + w], blob.labels)
+    person_w, person_h = _size(size_model, y + h)
+    if w <= _ONE_WIDE * person_w and h <= max_height * person_h:
+        return [blob.box]                                  # one person: no room for another beside them
+    crop = labels[y:y + h, x:x + w]
+    pixels = crop == blob.labels[0] if len(blob.labels) == 1 else np.isin(crop, blob.labels)
     pieces: list[tuple[int, int, int, int]] = []           # in the blob's box, disjoint
     for left, right, foot in _foot_runs(pixels, y, size_model):
         run = _tight(pixels, 0, foot, left, right)
         if run is None:
             continue
         top = run[1]
-        person_h = float(size_model.expected(y + foot)[1])
+        person_h = _size(size_model, y + foot)[1]
         parts = [(top, foot)]                              # row ranges of the run
         if foot - top > max_height * person_h:
             cut = foot - int(round(person_h))
             parts = [(cut, foot)]
             rest = _tight(pixels, top, cut, left, right)
             if rest is not None:
-                rest_h = float(size_model.expected(y + rest[1] + rest[3])[1])
+                rest_h = _size(size_model, y + rest[1] + rest[3])[1]
                 if rest[3] >= _REST_HEIGHT * rest_h:
                     parts.append((top, cut))
         for upper, lower in parts:
@@ -303,7 +310,7 @@ def _shaped(blob: _Blob, labels: np.ndarray, size_model: PersonSize, split_width
             if part is None:
                 continue
             px, py, pw, ph = part
-            part_w = float(size_model.expected(y + py + ph)[0])
+            part_w = _size(size_model, y + py + ph)[0]
             pieces_wide = int(round(pw / part_w))
             if pw < split_width * part_w or pieces_wide < 2:
                 pieces.append(part)
@@ -333,16 +340,16 @@ def _foot_runs(pixels: np.ndarray, top: int, size_model: PersonSize) -> list[tup
     height, width = pixels.shape
     filled = pixels.any(axis=0)
     bottom = np.where(filled, height - np.argmax(pixels[::-1], axis=0), 0)
-    person_w = float(size_model.expected(top + height)[0])
+    person_w = _size(size_model, top + height)[0]
     window = max(1, int(_LEG_GAP * person_w)) | 1
     bottom = _closing(bottom, window)
-    tolerance = np.maximum(2.0, _FOOT_STEP * size_model.expected(top + bottom)[1])
+    tolerance = np.maximum(2.0, _FOOT_STEP * _size(size_model, top + bottom)[1])
     steps = np.flatnonzero(np.abs(np.diff(bottom)) > tolerance[1:]) + 1
     edges = [0, *steps.tolist(), width]
     runs = [[a, b, int(bottom[a:b].max())] for a, b in zip(edges[:-1], edges[1:])]
     while len(runs) > 1:
         narrow = [k for k, (a, b, foot) in enumerate(runs)
-                  if b - a < _NARROW_RUN * float(size_model.expected(top + foot)[0])]
+                  if b - a < _NARROW_RUN * _size(size_model, top + foot)[0]]
         if not narrow:
             break
         k = min(narrow, key=lambda k: runs[k][1] - runs[k][0])
@@ -356,13 +363,28 @@ def _foot_runs(pixels: np.ndarray, top: int, size_model: PersonSize) -> list[tup
 
 def _closing(profile: np.ndarray, window: int) -> np.ndarray:
     """Grey closing of a 1-D profile (a running max, then a running min): fills dips narrower than ``window``."""
-    if window <= 1 or profile.size < 2:
-        return profile
     half = window // 2
-    padded = np.pad(profile, half, mode="edge")
-    dilated = np.lib.stride_tricks.sliding_window_view(padded, window).max(axis=1)
-    padded = np.pad(dilated, half, mode="edge")
-    return np.lib.stride_tricks.sliding_window_view(padded, window).min(axis=1)
+    if half == 0 or profile.size < 2:
+        return profile
+    return _running(_running(profile, half, np.maximum), half, np.minimum)
+
+
+def _running(profile: np.ndarray, half: int, pick) -> np.ndarray:
+    """Running max or min over ``2·half + 1`` neighbours, the ends repeated (windows are a few pixels)."""
+    padded = np.concatenate([np.full(half, profile[0]), profile, np.full(half, profile[-1])])
+    result = profile.copy()
+    for shift in range(2 * half + 1):
+        pick(result, padded[shift:shift + profile.size], out=result)
+    return result
+
+
+def _size(size_model: PersonSize, foot):
+    """:meth:`PersonSize.expected` without its checks (the rows here are the mask's own): floats for a float."""
+    if not isinstance(foot, np.ndarray):
+        height = max(size_model.a * float(foot) + size_model.b, 1.0)
+        return max(size_model.aspect * height, 1.0), height
+    height = np.maximum(size_model.a * foot + size_model.b, 1.0)
+    return np.maximum(size_model.aspect * height, 1.0), height
 
 
 def _split_columns(columns: np.ndarray, pieces: int) -> list[int]:
