@@ -350,18 +350,22 @@ def test_a_mot17_ground_truth_from_write_gt_reads_back_and_scores(tmp_path):
     from plugins.video_tracking import scenes
 
     scene = scenes.render(scenes.crossing(0))
+    # frames 40 to 60: walker 1 goes behind walker 2, so the visibilities run from 1 down to 0
+    rows_40_60 = (scene.ground_truth[:, 0] >= 40) & (scene.ground_truth[:, 0] <= 60)
+    gt, seen = scene.ground_truth[rows_40_60], scene.visibility[rows_40_60]
+    assert seen.min() == 0.0 and seen.max() == 1.0 and ((seen > 0) & (seen < 1)).any()
     path = tmp_path / "gt.txt"
-    scenes.write_gt(path, scene.ground_truth, visibility=scene.visibility)
+    scenes.write_gt(path, gt, visibility=seen)
     lines = path.read_text().splitlines()
-    assert lines[0] == "1,1,97,129,18,52,1,1,1" and all(line.count(",") == 8 for line in lines)
-    visibility = np.array([float(line.rsplit(",", 1)[1]) for line in lines])
-    np.testing.assert_allclose(visibility, scene.visibility, atol=5e-7)
+    assert len(lines) == len(gt) and all(line.count(",") == 8 for line in lines)
+    assert lines[0] == ",".join(str(v) for v in gt[0, :7]) + ",1," + f"{seen[0]:g}"
+    np.testing.assert_allclose([float(line.rsplit(",", 1)[1]) for line in lines], seen, atol=5e-7)
     rows = read_mot(path)
-    np.testing.assert_array_equal(rows, scene.ground_truth[:, :7])
-    scores = evaluate(rows, scene.ground_truth)
-    assert scores.mota == 1.0 and scores.idf1 == 1.0 and scores.num_objects == len(scene.ground_truth)
+    np.testing.assert_array_equal(rows, gt[:, :7])
+    scores = evaluate(rows, gt)
+    assert scores.mota == 1.0 and scores.idf1 == 1.0 and scores.num_objects == len(gt)
     with pytest.raises(TrackingError, match="one value in \\[0, 1\\] per row"):
-        scenes.write_gt(path, scene.ground_truth, visibility=scene.visibility[:-1])
+        scenes.write_gt(path, gt, visibility=seen[:-1])
 
 
 def test_errors_belong_to_the_belief_family():

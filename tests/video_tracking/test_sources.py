@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import doctest
+import tempfile
 from pathlib import Path
 
 import cv2
@@ -11,6 +12,7 @@ import pytest
 
 from plugins.video_tracking import scenes, sources, video
 from plugins.video_tracking.config import TrackerConfig
+from plugins.video_tracking.detections import Detections, read_detections, write_detections
 from plugins.video_tracking.errors import VideoError
 from plugins.video_tracking.initiation import init_from_gt
 from plugins.video_tracking.sources import FrameSource, open_source
@@ -54,11 +56,18 @@ def on_disk(short_scene, tmp_path_factory):
 
 
 def tracks_of(source, gt) -> np.ndarray:
-    """The MOT rows of tracking ``source`` frame by frame, as a user of the Python API does."""
+    """The MOT rows of tracking ``source`` frame by frame with detections, as a user of the Python API does."""
+    # Detections of walker 1 only, on every other frame, read from a file as a user would.
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "det.txt"
+        write_detections(path, Detections({int(f): [[x - 1, y - 1, w, h, 0.8]]
+                                           for f, i, x, y, w, h, *_ in gt if i == 1 and f % 2}))
+        detections = read_detections(path, frame_count=N_FRAMES, image_size=(320, 240))
     tracker = Tracker(TrackerConfig(particles=30), init_from_gt(gt), np.random.default_rng(0))
     rows = []
     with open_source(source) as frames:
-        for result in tracker.track(frames):
+        assert (frames.width, frames.height) == (320, 240)
+        for result in tracker.track(frames, detections=detections):
             rows += result.mot_rows()
     return np.array(rows)
 
@@ -94,15 +103,20 @@ def test_spread_picks_frames_over_the_whole_source(short_scene, on_disk, kind):
     assert len(list(source.spread(100))) == N_FRAMES
 
 
-def test_every_kind_gives_the_same_tracks_as_the_frames_in_memory(short_scene, on_disk):
+@pytest.fixture(scope="module")
+def tracks_in_memory(short_scene):
     frames, gt = short_scene
-    expected = tracks_of(frames, gt)
-    assert expected.shape == (2 * N_FRAMES, 10)
+    tracks = tracks_of(frames, gt)
+    assert tracks.shape == (2 * N_FRAMES, 10)
+    return tracks
+
+
+def test_every_kind_gives_the_same_tracks_as_the_frames_in_memory(short_scene, on_disk, tracks_in_memory):
     for kind in ("folder", "pattern", "sequence"):
-        assert np.array_equal(tracks_of(on_disk[kind], gt), expected), kind
+        assert np.array_equal(tracks_of(on_disk[kind], short_scene[1]), tracks_in_memory), kind
 
 
-def test_a_losslessly_encoded_video_gives_the_same_tracks(short_scene, tmp_path):
+def test_a_losslessly_encoded_video_gives_the_same_tracks(short_scene, tmp_path, tracks_in_memory):
     frames, gt = short_scene
     path = tmp_path / "crossing.avi"
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"FFV1"), 25.0, (320, 240))
@@ -117,7 +131,7 @@ def test_a_losslessly_encoded_video_gives_the_same_tracks(short_scene, tmp_path)
     source.close()
     if len(decoded) != N_FRAMES or not all(np.array_equal(a, b) for a, b in zip(decoded, frames)):
         pytest.skip("this OpenCV build does not decode FFV1 losslessly")
-    assert np.array_equal(tracks_of(path, gt), tracks_of(frames, gt))
+    assert np.array_equal(tracks_of(path, gt), tracks_in_memory)
     with open_source(path) as again:
         assert [int(np.array_equal(a, frames[k])) for a, k in zip(again.spread(3), [0, 7, 14])] == [1, 1, 1]
 
