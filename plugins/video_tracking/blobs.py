@@ -69,7 +69,7 @@ _REST_HEIGHT = 0.5
 #: gaps between legs; a step of the profile by more than this fraction of a person's height
 #: separates two people (one in front of the other); a run of columns narrower than this
 #: fraction of a person's width is no person on its own.
-_LEG_GAP, _FOOT_STEP, _NARROW_RUN = 0.3, 0.08, 0.5
+_LEG_GAP, _FOOT_STEP, _NARROW_RUN = 0.3, 0.08, 0.4
 
 #: A blob at most this many times a person's width, and not too tall, is one person as it is.
 _ONE_WIDE = 1.25
@@ -332,10 +332,11 @@ def _foot_runs(pixels: np.ndarray, top: int, size_model: PersonSize) -> list[tup
     """Runs of columns whose lowest pixel is on about one row: ``(first, past-last column, foot row)``.
 
     A person in front of another has their feet lower in the image: where the lowest pixel
-    of the columns steps by more than 15 % of a person's height, one person ends and the
-    next begins.  The gaps between a walker's legs (dips of the profile narrower than a
-    third of a person's width) are filled first, and a run narrower than half a person's
-    width joins the neighbour whose feet are nearer its own.  Rows are in the blob's box.
+    of the columns steps by more than 8 % of a person's height, one person ends and the
+    next begins.  The gaps between a walker's legs (dips of the profile narrower than 30 %
+    of a person's width) are filled first, and a run narrower than 40 % of a person's width
+    joins the neighbour whose feet are nearer its own (an arm, a bag, a sliver of someone
+    hidden).  Rows are in the blob's box.
     """
     height, width = pixels.shape
     filled = pixels.any(axis=0)
