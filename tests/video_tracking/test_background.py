@@ -195,6 +195,29 @@ def test_a_large_person_does_not_bias_the_gain():
     assert mask[5:55, 10:40].mean() > 0.95 and not model.lighting_change
 
 
+# -- downscale -------------------------------------------------------------------------------------
+def test_a_downscaled_model_gives_a_full_size_mask_and_protects_too():
+    rng = np.random.default_rng(9)
+    scene = textured(rng, 61, 81)                           # odd sizes: the last row and column are dropped
+    model = BackgroundModel(BackgroundConfig(downscale=2))
+    model.warm_up(noisy(scene, rng) for _ in range(30))
+    square = square_mask(scene.shape, 30, 20, 14)
+    protect = square_mask(scene.shape, 28, 18, 18)
+    for _ in range(200):
+        frame = noisy(scene, rng, gain=1.1)
+        frame[square] = GREEN
+        mask = model.apply(frame, protect=protect)
+    assert mask.shape == scene.shape[:2] and mask.dtype == np.bool_
+    # Block edges may shift the outline by a pixel.
+    assert mask[square].mean() > 0.95 and mask[~protect].mean() < 0.01
+
+
+def test_frames_smaller_than_the_downscale_are_refused():
+    model = BackgroundModel(BackgroundConfig(downscale=4))
+    with pytest.raises(TrackingError, match="cannot be shrunk 4 times"):
+        model.apply(np.zeros((3, 30, 3), np.uint8))
+
+
 # -- settings and docs -----------------------------------------------------------------------------
 @pytest.mark.parametrize("settings, message", [
     ({"max_foreground": 0}, r"max_foreground must lie in \(0, 1\]"),
@@ -204,6 +227,7 @@ def test_a_large_person_does_not_bias_the_gain():
     ({"gain_change": float("nan")}, "gain_change must be a positive number"),
     ({"compensate_gain": "yes"}, "compensate_gain must be True or False"),
     ({"median_warm_up": 1}, "median_warm_up must be True or False"),
+    ({"downscale": 0}, "downscale must be a positive integer"),
 ])
 def test_bad_settings_are_refused(settings, message):
     with pytest.raises(TrackingError, match=message):
