@@ -453,7 +453,7 @@ class BackgroundModel:
         if np.count_nonzero(chosen) < 16:
             return default
         ratios = sample.sum(axis=0)[chosen] / reference.sum(axis=0)[chosen]
-        return float(np.median(ratios))
+        return _middle(ratios)
 
     def _gain_swing(self, mature: bool) -> bool:
         """Whether the gain moved fast; updates the running mean of the gains."""
@@ -502,8 +502,15 @@ class BackgroundModel:
         """Per-channel noise variance of the frame about the background, from the grid (MOG2's bounds)."""
         background = ~self._was_foreground if self._was_foreground is not None else slice(None)
         distances = ((sample - self._reference) ** 2).sum(axis=0)[background]
-        variance = float(np.median(distances)) / _CHI2_MEDIAN[sample.shape[0]] if distances.size else 0.0
+        variance = _middle(distances) / _CHI2_MEDIAN[sample.shape[0]] if distances.size else 0.0
         return float(np.clip(variance, self._subtractor.getVarMin(), self._subtractor.getVarMax()))
+
+
+def _middle(values: np.ndarray) -> float:
+    """The (upper) median of a non-empty array: a partition, several times faster than np.median here."""
+    values = values.reshape(-1)
+    middle = values.size // 2
+    return float(np.partition(values, middle)[middle])
 
 
 def _median(frames: list[np.ndarray]) -> np.ndarray:
