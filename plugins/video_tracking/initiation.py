@@ -287,6 +287,11 @@ class InitiationConfig:
         for this many consecutive frames is lost: no longer output, and remembered for
         ``memory`` frames so that it can take back its id (default 25); None never loses
         a track.
+    appearance_support : float or None
+        A track whose window at its estimate has a Bhattacharyya coefficient ρ of at least
+        this with its appearance templates (the smallest over the appearance cues) counts as
+        supported, detected or not (default 0.8); None: only candidates (and foreground)
+        support a track.
     coast_frames : int
         A track is output while it has been unsupported for at most this many frames
         (default 2); after that it is still followed, and output again once a candidate
@@ -340,6 +345,7 @@ class InitiationConfig:
     exit_foreground: float = 0.1
     lost_frames: int | None = 25
     coast_frames: int = 2
+    appearance_support: float | None = 0.8
     first_frame: bool = True
     duplicate_iou: float = 0.5
     duplicate_frames: int | None = 15
@@ -348,6 +354,7 @@ class InitiationConfig:
     memory: int = 50
     reid_similarity: float = 0.85
     size_smoothing: float = 0.3
+    max_aspect: float = 1.0
     centre_gain: float = 0.5
 
     def __post_init__(self) -> None:
@@ -366,12 +373,17 @@ class InitiationConfig:
             object.__setattr__(self, "duplicate_frames", _integer("duplicate_frames", self.duplicate_frames, 1))
         object.__setattr__(self, "first_frame", checks.flag("InitiationConfig.first_frame", self.first_frame))
         object.__setattr__(self, "coast_frames", _integer("coast_frames", self.coast_frames, 0))
+        if self.appearance_support is not None:
+            object.__setattr__(self, "appearance_support",
+                               _fraction("appearance_support", self.appearance_support, allow_zero=True))
         object.__setattr__(self, "anywhere", checks.flag("InitiationConfig.anywhere", self.anywhere))
         object.__setattr__(self, "match_iou", _fraction("match_iou", self.match_iou, allow_zero=False))
         object.__setattr__(self, "memory", _integer("memory", self.memory, 0))
         object.__setattr__(self, "reid_similarity",
                            _fraction("reid_similarity", self.reid_similarity, allow_zero=False))
         object.__setattr__(self, "size_smoothing", _fraction("size_smoothing", self.size_smoothing, allow_zero=False))
+        object.__setattr__(self, "max_aspect", checks.number("InitiationConfig.max_aspect", self.max_aspect,
+                                                             positive=True))
         object.__setattr__(self, "centre_gain", _fraction("centre_gain", self.centre_gain, allow_zero=True))
 
     def min_area_pixels(self, image_shape: tuple[int, int]) -> float:

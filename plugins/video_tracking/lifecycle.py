@@ -5,9 +5,10 @@ when there is no detector.  Before the cues score the particles, every track tak
 one candidate (:func:`~plugins.video_tracking.association.assign`); :class:`Lifecycle`
 then reads the outcome:
 
-* A track that took a candidate is *supported*; so is, without a detector, a track whose
-  box is still mostly foreground (a person standing among others, whose blob merged with
-  theirs).  A track unsupported for ``lost_frames`` consecutive frames is *lost*: it is no
+* A track that took a candidate is *supported*; so is a track whose window still looks
+  like its appearance templates (``appearance_support``), and, without a detector, a track
+  whose box still holds foreground (a person standing among others, whose blob merged
+  with theirs).  A track unsupported for ``lost_frames`` consecutive frames is *lost*: it is no
   longer output, and the tracker keeps what it looked like for ``memory`` frames.
 * A track whose centre is in the border zone (or outside the image) while unsupported for
   ``exit_frames`` frames has left the image and ends.  Of two tracks that overlap with IoU
@@ -108,7 +109,8 @@ class Lifecycle:
                 | (boxes[:, 0] + boxes[:, 2] > width - b) | (boxes[:, 1] + boxes[:, 3] > height - b))
 
     def update(self, ids: list[int], boxes: np.ndarray, assigned: np.ndarray, candidates: np.ndarray,
-               foreground: np.ndarray | None = None, births_allowed: bool = True) -> FrameOutcome:
+               foreground: np.ndarray | None = None, births_allowed: bool = True,
+               likeness: np.ndarray | None = None) -> FrameOutcome:
         """Read one frame.
 
         Parameters
@@ -127,6 +129,9 @@ class Lifecycle:
         births_allowed : bool
             False on frames whose candidates cannot be trusted (a lighting change): no chain
             grows or is born.
+        likeness : ndarray, shape (τ,), optional
+            How much each track's window looks like its appearance templates (the
+            Bhattacharyya coefficient ρ); ρ ≥ ``appearance_support`` supports the track.
 
         Returns
         -------
@@ -141,6 +146,8 @@ class Lifecycle:
         supported = np.asarray(assigned) != UNASSIGNED
         if foreground is not None and len(boxes):
             supported |= foreground_fraction(foreground, boxes) >= config.exit_foreground
+        if likeness is not None and config.appearance_support is not None and len(boxes):
+            supported |= np.asarray(likeness) >= config.appearance_support
         lost, ended = self._track_counters(ids, boxes, supported)
 
         taken = np.zeros(len(candidates), dtype=bool)

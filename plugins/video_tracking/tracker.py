@@ -40,11 +40,13 @@ import numpy as np
 from plugins.video_tracking.appearance import AppearanceFollower
 from plugins.video_tracking.association import assign
 from plugins.video_tracking.background import BackgroundModel
+from plugins.video_tracking.blobs import box_mask
+from plugins.video_tracking.candidates import BlobCandidates
 from plugins.video_tracking.config import TrackerConfig
-from plugins.video_tracking.cues import CUES, Observation
+from plugins.video_tracking.cues import CUES, AppearanceCue, Observation, bhattacharyya
 from plugins.video_tracking.detections import Detections
 from plugins.video_tracking.errors import InitError, TrackingError
-from plugins.video_tracking.initiation import InitPlan, foreground_blobs
+from plugins.video_tracking.initiation import InitPlan
 from plugins.video_tracking.particles import CX, CY, LOG_SCALE, VX, VY, ConstantVelocity, ParticleSet, adaptive_count
 from plugins.video_tracking.tracks import Estimate, TrackManager
 from plugins.video_tracking.weighting import BELIEF_COLUMNS, Evidence, Weighing, make_weighting
@@ -221,6 +223,7 @@ class Tracker:
         self.tracks = TrackManager(config, init, self.cues, rng)
         self.diagnostic_columns = diagnostic_columns(config)
         self._reads_candidates = "detections" in config.cues
+        self._blobs: BlobCandidates | None = None
         self._gate = config.initiation.match_iou if config.initiation is not None else 0.3
         self._motion: ConstantVelocity | None = None
         self._image_shape: tuple[int, int] | None = None
@@ -277,11 +280,19 @@ class Tracker:
         detector = detections is not None
         if detector:
             detections = self._checked_detections(frame, detections)
-        foreground = self.background.apply(image) if self.background is not None else None
+        # With a detector the candidates come from it: the mask is needed only by a cue.
+        needs_mask = self.background is not None and ("foreground" in self.config.cues or not detector)
+        foreground = None
+        if needs_mask:
+            # Automatic tracks keep their people in the foreground: a person who stands still
+            # must not be learnt into the background under their own track.
+            protect = box_mask(image.shape, [t.box() for t in self.targets]) \
+                if self.tracks.lifecycle is not None and self.targets else None
+            foreground = self.background.apply(image, protect)
         births_allowed = not getattr(self.background, "lighting_change", False)
         self.tracks.end_planned(frame)
         candidates = self._candidates(detections, foreground)
-        assigned = None
+        assigned = likeness = None
         estimates: list[Estimate] = []
         diagnostics = FrameDiagnostics(self.diagnostic_columns, (), np.zeros((0, len(self.diagnostic_columns))))
         if self.targets:
@@ -300,17 +311,34 @@ class Tracker:
             self._resample(weighted, records)
             if assigned is not None:
                 self.tracks.follow_candidates(assigned, candidates)
+            if self.tracks.lifecycle is not None:
+                likeness = self._likeness(obs)
             estimates = [Estimate(frame, t.id, t.estimate.copy(), t.box()) for t in self.targets]
             diagnostics = FrameDiagnostics(self.diagnostic_columns, tuple(t.id for t in self.targets),
                                            np.column_stack([records[c] for c in self.diagnostic_columns]))
         estimates = self.tracks.births_and_deaths(frame, image, foreground, estimates, candidates, assigned,
-                                                  detector=detector, births_allowed=births_allowed)
+                                                  detector=detector, births_allowed=births_allowed,
+                                                  likeness=likeness)
         alive = {e.id for e in estimates}
         if any(i not in alive for i in diagnostics.ids):
             keep = [k for k, i in enumerate(diagnostics.ids) if i in alive]
             diagnostics = FrameDiagnostics(diagnostics.columns, tuple(diagnostics.ids[k] for k in keep),
                                            diagnostics.values[keep])
         return FrameResult(frame, tuple(estimates), diagnostics, time.perf_counter() - started)
+
+    def _likeness(self, obs: Observation) -> np.ndarray | None:
+        """How much each target's window at its estimate still looks like its templates, shape (τ,).
+
+        The smallest Bhattacharyya coefficient ρ (L (12)) over the appearance cues; None
+        without an appearance cue.
+        """
+        cues = [cue for cue in self.cues if isinstance(cue, AppearanceCue)]
+        if not cues:
+            return None
+        states = np.array([t.estimate for t in self.targets])
+        owner = np.arange(len(states))
+        rho = [np.diagonal(bhattacharyya(cue.histograms(obs, states, owner), cue.templates)) for cue in cues]
+        return np.min(rho, axis=0)
 
     def _checked_detections(self, frame: int, detections) -> np.ndarray:
         """A frame's detections at the boundary: a finite (n, 5) array with positive sizes and scores in [0, 1]."""
@@ -327,9 +355,9 @@ class Tracker:
             return detections
         if self.tracks.lifecycle is None or foreground is None:
             return None
-        initiation = self.config.initiation
-        blobs = foreground_blobs(foreground, initiation.min_area_pixels(foreground.shape), initiation.opening)
-        return np.column_stack([blobs, np.ones(len(blobs))])
+        if self._blobs is None:
+            self._blobs = BlobCandidates(self.config.initiation, foreground.shape)
+        return self._blobs(foreground)
 
     def _begin(self, frame: int, image: np.ndarray) -> np.ndarray:
         """Check a frame at the boundary; the first one fixes the image size of the run."""

@@ -202,7 +202,7 @@ class TrackManager:
     def births_and_deaths(self, frame: int, image: np.ndarray, foreground: np.ndarray | None,
                           estimates: list[Estimate], candidates: np.ndarray | None = None,
                           assigned: np.ndarray | None = None, detector: bool = False,
-                          births_allowed: bool = True) -> list[Estimate]:
+                          births_allowed: bool = True, likeness: np.ndarray | None = None) -> list[Estimate]:
         """Planned births, then the automatic tracks' losses, deaths and births; returns the frame's estimates.
 
         Parameters
@@ -221,6 +221,9 @@ class TrackManager:
             foreground counts as supported).
         births_allowed : bool
             False when this frame's candidates must not start tracks (a lighting change).
+        likeness : ndarray, shape (τ,), optional
+            How much each target's window still looks like its templates (Bhattacharyya
+            coefficient): at least ``appearance_support`` supports the target.
 
         The estimates of tracks that end or are lost here are dropped; those of newborn
         targets are appended (their birth boxes).
@@ -240,7 +243,7 @@ class TrackManager:
         ids = [e.id for e in estimates[:tracked]]
         boxes = np.array([e.box for e in estimates[:tracked]]).reshape(-1, 4)
         outcome = self.lifecycle.update(ids, boxes, assigned, candidates,
-                                        None if detector else foreground, births_allowed)
+                                        None if detector else foreground, births_allowed, likeness)
         for target_id in outcome.lost:
             self._remember(target_id, frame)
         for target_id in outcome.lost + outcome.ended:
@@ -274,7 +277,10 @@ class TrackManager:
                 continue
             x, y, w, h, score = candidates[k]
             self._last_seen[target.id] = (self._frame, np.array([x, y, w, h]))
-            target.size = (1.0 - rate) * target.size + rate * np.array([w, h])
+            # A standing person is rarely wider than ``max_aspect`` of their height; a wider
+            # candidate box holds background (or part of a neighbour) beside them.
+            width = min(w, initiation.max_aspect * h)
+            target.size = (1.0 - rate) * target.size + rate * np.array([width, h])
             if gain > 0:
                 shift = np.zeros(target.particles.states.shape[1])
                 shift[[CX, CY]] = gain * score * (np.array([x + w / 2.0, y + h / 2.0]) - target.estimate[[CX, CY]])
