@@ -4,11 +4,13 @@
 image pattern (``img1/%06d.jpg``) or a MOTChallenge sequence folder
 (:func:`~plugins.video_tracking.sources.open_source`); ``--detections DET.txt`` adds a
 detector's boxes (a MOTChallenge detection file).  With no init file the tracks are
-started and ended automatically from the background model (SPEC B.4); ``--init BOXES``
+started, lost, found again and ended automatically from the detections, or from the
+person blobs of the background model without them; ``--init BOXES``
 gives the targets of the first frame (later entries are still found automatically);
 ``--init-from-gt GT.txt`` takes every birth and death from a ground truth and scores the
 tracks against it.  ``belief track --demo --out DIR`` renders the synthetic demo scene,
-tracks it from its ground truth and prints the scores.  ``--set KEY=VALUE`` reaches every
+tracks it automatically (the ground truth is not given to the tracker) and prints the
+scores against its ground truth.  ``--set KEY=VALUE`` reaches every
 setting of :class:`~plugins.video_tracking.config.TrackerConfig`.
 
 ``belief eval TRACKS.txt GT.txt`` scores tracks; ``belief experiment GRID.toml`` runs a
@@ -25,6 +27,11 @@ from pathlib import Path
 from typing import Any
 
 __all__ = ["register", "register_eval", "register_experiment", "AUTOMATIC_WARM_UP", "parse_setting"]
+
+#: The line printed under the scores of a run that has a ground truth.
+SCORES_EXPLAINED = ("(MOTA: 1 minus the missed people, false boxes and identity switches per ground-truth box; "
+                    "IDF1: the share of boxes on the right person with the right id; 1 is perfect for both, a box "
+                    "counts when it overlaps its person by IoU >= 0.5)")
 
 #: Frames the background model learns from before an automatic run (``--warm-up``).
 AUTOMATIC_WARM_UP = 50
@@ -101,7 +108,7 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
         options["template_update"] = True
     if args.detections is not None:
         _add_detections_cue(options)
-    automatic = not args.demo and args.init_from_gt is None
+    automatic = args.init_from_gt is None
     if automatic and options.get("initiation") is not False:
         # Without an init file every track starts from the background model, which must know
         # the background before the first frame; with one, only later entries are added.
@@ -155,9 +162,9 @@ def _cmd_track(args: argparse.Namespace) -> int:
         detections = _detections(args, len(scene), width, height)
         extra = {"gt.txt": lambda path: scenes.write_gt(path, gt, visibility=scene.visibility),
                  "scene.avi": lambda path: scenes.write_video(path, scene)}
-        summary = run(scene, init_from_gt(gt, source="demo scene ground truth"), config, args.out, args.seed,
-                      write_video=not args.no_video, progress=progress, gt=gt, extra_outputs=extra,
-                      detections=detections)
+        # The tracker finds the people itself, as on a user's video; the ground truth only scores it.
+        summary = run(scene, None, config, args.out, args.seed, write_video=not args.no_video, progress=progress,
+                      gt=gt, extra_outputs=extra, detections=detections)
     else:
         if args.source is None:
             raise TrackingError("give a SOURCE to track (a video, a folder of images, an image pattern or a "
@@ -183,6 +190,7 @@ def _cmd_track(args: argparse.Namespace) -> int:
         s = summary.scores
         print(f"MOTA {s.mota:.4f}  IDF1 {s.idf1:.4f}  ID switches {s.id_switches}  "
               f"centre error mean {s.mean_centre_error:.2f} px, median {s.median_centre_error:.2f} px")
+        print(SCORES_EXPLAINED)
     return 0
 
 
@@ -204,10 +212,12 @@ def register(subparsers: Any) -> None:
                     "per target, each particle weighted by "
                     "fusing colour, location, foreground and edge cues over {t1..tN, FA} with a belief-function "
                     "rule (or the adaptive, sum or product fusion). Without an init file, tracks start on "
-                    "foreground blobs entering the image and end when they leave. Writes tracks.txt "
+                    "detections (--detections) or foreground blobs that persist, are hidden while nothing supports "
+                    "them, take back their id when they are seen again, and end when they leave. Writes tracks.txt "
                     "(MOTChallenge), diagnostics.csv, diagnostics.png, annotated.avi and summary.json into "
                     "--out, and removes those of an earlier run there that this run does not write. With --demo, "
-                    "renders a synthetic scene, tracks it from its ground truth and prints the scores.")
+                    "renders a synthetic scene, tracks it automatically and prints its scores against the scene's "
+                    "ground truth.")
     p.add_argument("source", nargs="?", metavar="SOURCE",
                    help="what to track: a video file; a folder of images (.jpg, .png, .bmp, .tif, ..., taken in "
                         "the order of their names); an image pattern such as img1/%%06d.jpg (from number 0 or 1 "
