@@ -76,6 +76,9 @@ _BACKGROUND_REFRESH = 25
 #: A warm-up with fewer frames than this has no reliable median and learns as before.
 _MEDIAN_MIN_FRAMES = 5
 
+#: At most this many warm-up frames propose a background colour where the median is doubtful.
+_MODE_CANDIDATES = 50
+
 #: Median of a chi-square variable with 1 and with 3 degrees of freedom: a robust noise
 #: variance is the median of the squared colour distances divided by it.
 _CHI2_MEDIAN = {1: 0.4549, 3: 2.3660}
@@ -545,11 +548,14 @@ def _mode_background(frames: list[np.ndarray], median: np.ndarray, threshold: fl
         base = flat[offset:offset + stack.shape[1]].astype(np.int32)
         agree = (_squares(stack - base) <= threshold).sum(axis=0)
         doubtful = np.flatnonzero(2 * agree < count)
-        # Every frame's colour is a candidate; pairwise distances, a few hundred pixels at a time.
-        for start in range(0, doubtful.size, 256):
-            pixels = doubtful[start:start + 256]
+        # The colours of up to 50 frames spread over the warm-up are the candidates, each
+        # against every frame, a chunk of pixels at a time (about 4 M distances).
+        candidates = np.unique(np.linspace(0, count - 1, min(count, _MODE_CANDIDATES)).round().astype(np.intp))
+        chunk = max(1, (1 << 22) // (count * candidates.size))
+        for start in range(0, doubtful.size, chunk):
+            pixels = doubtful[start:start + chunk]
             values = stack[:, pixels]                                    # (frames, pixels, C)
-            close = _squares(values[:, None] - values[None, :]) <= threshold
+            close = _squares(values[candidates, None] - values[None, :]) <= threshold
             support = close.sum(axis=1)                                  # (candidates, pixels)
             best = support.argmax(axis=0)
             better = support[best, np.arange(pixels.size)] > agree[pixels]
