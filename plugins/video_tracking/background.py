@@ -381,11 +381,10 @@ class BackgroundModel:
                         self._subtractor.getVarMin(), self._subtractor.getVarMax())
         threshold = self.config.var_threshold * noise
         background = _mode_background(frames, median, threshold)
-        reference = background.astype(np.float32)
         for frame in frames:
             cleaned = frame.copy()
-            moved = _squared_distance(frame, reference) > threshold
-            cleaned[moved] = background[moved]
+            moved = _squared_distance(frame, background) > threshold
+            cv2.copyTo(background, moved.view(np.uint8), cleaned)
             self._learn(cleaned)
         if self._reference is None or self.frames_seen == len(frames):
             self._reference = self._sample(background)
@@ -537,39 +536,42 @@ def _mode_background(frames: list[np.ndarray], median: np.ndarray, threshold: fl
     that is less than half of them.
     """
     count = len(frames)
+    agree = np.zeros(median.shape[:2], np.int32)
+    for frame in frames:
+        agree += _squared_distance(frame, median) <= threshold
+    doubtful = np.flatnonzero(2 * agree < count)
     background = median.copy()
-    flat = background.reshape(-1, 1 if median.ndim == 2 else median.shape[2])
-    channels = flat.shape[1]
-    band = max(1, (1 << 22) // max(1, frames[0][0].size * count))
-    for top in range(0, median.shape[0], band):
-        stack = np.stack([frame[top:top + band] for frame in frames]).astype(np.int32)
-        stack = stack.reshape(count, -1, channels)
-        offset = top * median.shape[1]
-        base = flat[offset:offset + stack.shape[1]].astype(np.int32)
-        agree = (_squares(stack - base) <= threshold).sum(axis=0)
-        doubtful = np.flatnonzero(2 * agree < count)
-        # The colours of up to 50 frames spread over the warm-up are the candidates, each
-        # against every frame, a chunk of pixels at a time (about 4 M distances).
-        candidates = np.unique(np.linspace(0, count - 1, min(count, _MODE_CANDIDATES)).round().astype(np.intp))
-        chunk = max(1, (1 << 22) // (count * candidates.size))
-        for start in range(0, doubtful.size, chunk):
-            pixels = doubtful[start:start + chunk]
-            values = stack[:, pixels]                                    # (frames, pixels, C)
-            close = _squares(values[candidates, None] - values[None, :]) <= threshold
-            support = close.sum(axis=1)                                  # (candidates, pixels)
-            best = support.argmax(axis=0)
-            better = support[best, np.arange(pixels.size)] > agree[pixels]
-            members = close[best, :, np.arange(pixels.size)].T           # (frames, pixels)
-            mean = (values * members[:, :, None]).sum(axis=0) / members.sum(axis=0)[:, None]
-            chosen = offset + pixels[better]
-            flat[chosen] = np.rint(mean[better]).astype(np.uint8)
+    if doubtful.size == 0:
+        return background
+    channels = 1 if median.ndim == 2 else median.shape[2]
+    flat = background.reshape(-1, channels)
+    agree = agree.reshape(-1)[doubtful]
+    stack = np.stack([frame.reshape(-1, channels)[doubtful] for frame in frames]).astype(np.int32)
+    # The colours of up to 50 frames spread over the warm-up are the candidates, each
+    # against every frame, a chunk of pixels at a time (about 4 M distances).
+    candidates = np.unique(np.linspace(0, count - 1, min(count, _MODE_CANDIDATES)).round().astype(np.intp))
+    chunk = max(1, (1 << 22) // (count * candidates.size))
+    for start in range(0, doubtful.size, chunk):
+        values = stack[:, start:start + chunk]                       # (frames, pixels, C)
+        close = _squares(values[candidates, None] - values[None, :]) <= threshold
+        support = close.sum(axis=1)                                  # (candidates, pixels)
+        best = support.argmax(axis=0)
+        columns = np.arange(values.shape[1])
+        better = support[best, columns] > agree[start:start + chunk]
+        members = close[best, :, columns].T                          # (frames, pixels)
+        mean = (values * members[:, :, None]).sum(axis=0) / members.sum(axis=0)[:, None]
+        flat[doubtful[start:start + chunk][better]] = np.rint(mean[better]).astype(np.uint8)
     return background
 
 
 def _squared_distance(frame: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    """Squared colour distance of every pixel to the reference, (H, W) float32."""
-    difference = frame.astype(np.float32) - reference
-    return difference * difference if difference.ndim == 2 else _squares(difference)
+    """Squared colour distance of every pixel of a uint8 frame to a uint8 reference, (H, W) float32."""
+    difference = cv2.absdiff(frame, reference)
+    squares = cv2.multiply(difference, difference, dtype=cv2.CV_32F)
+    if squares.ndim == 2:
+        return squares
+    # A 1 x 3 transform sums the channels in one pass.
+    return cv2.transform(squares, np.ones((1, 3), np.float32))
 
 
 def _squares(difference: np.ndarray) -> np.ndarray:
