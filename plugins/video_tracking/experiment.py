@@ -32,6 +32,13 @@ The configuration is a TOML file::
     gt = "pets09/gt.txt"
     init = "gt"                         # tracks born and ended as in the ground truth; or "automatic"
 
+    [[sequences]]
+    name = "pets with detections"
+    video = "pets09/video.avi"
+    gt = "pets09/gt.txt"
+    detections = "pets09/det.txt"       # a MOTChallenge detection file; adds the "detections" cue
+    init = "automatic"
+
     [[methods]]
     name = "R-rule"
     rule = "r_rule"
@@ -98,7 +105,9 @@ __all__ = [
 CELL_FORMAT = 2
 
 #: Settings of a sequence, a method, and the top level of a configuration file.
-_SEQUENCE_KEYS = ("name", "scene", "scene_seed", "frames", "video", "gt", "init")
+_SEQUENCE_KEYS = ("name", "scene", "scene_seed", "frames", "video", "gt", "init", "detections")
+#: The sequence's paths, resolved against the configuration's folder.
+_PATH_KEYS = ("video", "gt", "detections")
 _TOP_KEYS = ("name", "seeds", "tracker", "sequences", "methods", "grid")
 _GRID_KEYS = ("rules", "fusions", "cues")
 _INITS = ("gt", "automatic")
@@ -131,6 +140,12 @@ class SequenceSpec:
         ``"gt"``: every target is born at its first ground-truth box and removed after its
         last (``belief track --init-from-gt``); ``"automatic"``: the tracks start and end on
         their own (SPEC B.4) after a background warm-up of 50 frames.
+    detections : str or None
+        Path of a MOTChallenge detection file (``det.txt``, absolute once loaded), read with
+        :func:`~plugins.video_tracking.detections.read_detections` against the whole
+        sequence's length and frame size (:meth:`load_detections`).  Every method that
+        tracks the sequence is given the boxes and fuses the ``"detections"`` cue after its
+        own cues, as ``belief track --detections`` does.  None: no detector.
     """
 
     name: str
@@ -140,6 +155,7 @@ class SequenceSpec:
     video: str | None = None
     gt: str | None = None
     init: str = "gt"
+    detections: str | None = None
 
     def __post_init__(self) -> None:
         from plugins.video_tracking import scenes
@@ -161,6 +177,8 @@ class SequenceSpec:
             _check_count(self.frames, f"{where}: frames", minimum=1)
         if self.init not in _INITS:
             raise ExperimentError(f"{where}: init must be one of {', '.join(_INITS)}, got {self.init!r}")
+        if self.detections is not None and (not isinstance(self.detections, str) or not self.detections.strip()):
+            raise ExperimentError(f"{where}: detections must be the path of a detection file, got {self.detections!r}")
 
     def load(self) -> tuple[Any, np.ndarray]:
         """The frames to track (a rendered scene or a video path) and the ground-truth rows."""
@@ -180,6 +198,50 @@ class SequenceSpec:
             frames = frames[: self.frames]
             gt = gt[gt[:, 0] <= self.frames]
         return frames, gt
+
+    def load_detections(self):
+        """The detections of the sequence, or None without a detection file.
+
+        The file is checked against the whole sequence (the video's frame count and size, or
+        the scene's), even when only its first ``frames`` are tracked.
+
+        Returns
+        -------
+        Detections or None
+
+        Raises
+        ------
+        TrackingError
+            The file is missing or unreadable, or a line is malformed, after the last frame
+            or wholly outside the image (:func:`~plugins.video_tracking.detections.read_detections`;
+            the message names the file).
+        """
+        from plugins.video_tracking.detections import read_detections
+
+        if self.detections is None:
+            return None
+        if self.scene is not None:
+            from plugins.video_tracking import scenes
+
+            config = scenes.PRESETS[self.scene](self.scene_seed)
+            frame_count, size = config.n_frames, (config.width, config.height)
+        else:
+            from plugins.video_tracking.video import VideoReader
+
+            with contextlib.closing(VideoReader(self.video)) as reader:
+                frame_count, size = reader.frame_count, (reader.width, reader.height)
+        return read_detections(self.detections, frame_count=frame_count, image_size=size)
+
+    def record(self) -> dict[str, Any]:
+        """The fields as a dict; ``detections`` only when the sequence has a detection file.
+
+        A sequence without detections keeps the record (and so the cell keys and the
+        ``experiment.json``) it had before sequences could have detections.
+        """
+        record = asdict(self)
+        if record["detections"] is None:
+            del record["detections"]
+        return record
 
 
 @functools.lru_cache(maxsize=4)
@@ -260,6 +322,8 @@ class Cell:
         if self.sequence.init == "automatic":
             settings.setdefault("initiation", {})
             settings.setdefault("warm_up", AUTOMATIC_WARM_UP)
+        if self.sequence.detections is not None:
+            settings["cues"] = _with_detections_cue(settings.get("cues"))
         return settings
 
     def config(self):
@@ -269,7 +333,7 @@ class Cell:
     @property
     def key(self) -> str:
         """A file-name-safe identifier: the labels and a digest of every setting."""
-        record = {"format": CELL_FORMAT, "sequence": asdict(self.sequence), "settings": self.settings(),
+        record = {"format": CELL_FORMAT, "sequence": self.sequence.record(), "settings": self.settings(),
                   "seed": self.seed}
         digest = hashlib.sha256(json.dumps(record, sort_keys=True, default=str).encode()).hexdigest()[:12]
         return f"{_slug(self.sequence.name)}__{_slug(self.method.name)}__seed{self.seed}__{digest}"
@@ -321,7 +385,7 @@ class Experiment:
     def to_dict(self) -> dict[str, Any]:
         """The resolved grid, JSON-ready."""
         return {"name": self.name, "seeds": list(self.seeds), "tracker": _thaw(self.tracker),
-                "sequences": [asdict(s) for s in self.sequences],
+                "sequences": [s.record() for s in self.sequences],
                 "methods": [{"name": m.name, **m.settings()} for m in self.methods]}
 
 
@@ -334,13 +398,14 @@ def load_experiment(path: str | os.PathLike[str], data_dir: str | os.PathLike[st
     path : path
         The configuration (see the module's documentation for its layout).
     data_dir : path, optional
-        Where relative ``video`` and ``gt`` paths are looked for (default: the file's folder).
+        Where relative ``video``, ``gt`` and ``detections`` paths are looked for (default: the
+        file's folder).
 
     Raises
     ------
     ExperimentError
         A missing or malformed file, an unknown key, scene, rule, cue or setting, or a
-        missing video; the message names the problem.
+        missing video, ground truth or detection file; the message names the problem.
     """
     try:
         import tomllib
@@ -372,7 +437,7 @@ def experiment_from_mapping(mapping: Mapping[str, Any], base_dir: str | os.PathL
     mapping : mapping
         Keys ``name``, ``seeds``, ``tracker``, ``sequences``, and ``methods`` or ``grid``.
     base_dir : path, optional
-        Where relative video and ground-truth paths are looked for (default: the working
+        Where relative video, ground-truth and detection paths are looked for (default: the working
         directory).
 
     Raises
@@ -431,7 +496,7 @@ def _sequence(entry: Any, base: Path) -> SequenceSpec:
     values = dict(entry)
     if "name" not in values:
         values["name"] = values.get("scene") or Path(str(values.get("video", "?"))).parent.name or "video"
-    for key in ("video", "gt"):
+    for key in _PATH_KEYS:
         if key in values:
             if not isinstance(values[key], str):
                 raise ExperimentError(f"sequence {values['name']!r}: {key} must be a path, got {values[key]!r}")
@@ -478,6 +543,23 @@ def _grid_methods(grid: Any) -> list[MethodSpec]:
                         parts.append("+".join(cues))
                 methods.append(MethodSpec.from_mapping("/".join(parts) or "default", options))
     return methods
+
+
+def _with_detections_cue(cues: Any) -> Any:
+    """The cues with ``"detections"`` appended when it is not among them (the rule of ``belief track``).
+
+    ``None`` stands for the default cues.  A value that is not a cue name or a list of them
+    is returned as it is, for :class:`TrackerConfig` to report.
+    """
+    from plugins.video_tracking.config import TrackerConfig
+
+    if cues is None:
+        cues = list(TrackerConfig().cues)
+    if isinstance(cues, str):
+        cues = [cues]
+    if isinstance(cues, (list, tuple)) and "detections" not in cues:
+        return list(cues) + ["detections"]
+    return cues
 
 
 def _cue_tuple(value: Any) -> tuple[str, ...]:

@@ -4,7 +4,10 @@
 returns a JSON-ready record: the row of ``results.csv``, the centre errors of every target
 for ``rms.csv`` (W (36)), the per-frame curves of W (33)–(35) and C (15), and the tracks.
 It runs on a worker (a local process or a Dask worker): a synthetic scene is rendered
-there, and a recorded video must be readable at the same path.
+there, and a recorded video (and its detection file, if any) must be readable at the same
+path.  A sequence with a detection file gives each frame's boxes to the tracker
+(``Tracker.track(frames, detections=...)``); its cells fuse the ``"detections"`` cue
+(:meth:`plugins.video_tracking.experiment.Cell.settings`).
 """
 
 from __future__ import annotations
@@ -43,10 +46,17 @@ def run_cell(cell: Cell) -> dict[str, Any]:
         list of ``[frame, centre error]``); ``curves`` (rows ``frame, id`` and
         :data:`CURVE_COLUMNS`); ``tracks`` (the rows of ``tracks.txt``); ``format`` and
         ``key`` (which cell, in which file format).
+
+    Raises
+    ------
+    TrackingError
+        The sequence cannot be read (a video, ground-truth or detection file; the message
+        names it), or a setting is bad.
     """
     started = time.perf_counter()
     config = cell.config()
     frames, gt = cell.sequence.load()
+    detections = cell.sequence.load_detections()
     plan = init_from_gt(gt, source=f"ground truth of {cell.sequence.name}") if cell.sequence.init == "gt" else None
     rows: list[list[float]] = []
     diagnostics: list[dict[str, float]] = []
@@ -56,7 +66,7 @@ def run_cell(cell: Cell) -> dict[str, Any]:
         if config.warm_up > 0 and tracker.background is not None:
             tracker.warm_up(source.spread(config.warm_up))
         count = 0
-        for result in tracker.track(source):
+        for result in tracker.track(source, detections=detections):
             tracking_seconds += result.seconds
             rows += result.mot_rows()
             diagnostics += result.diagnostics.rows(result.frame)

@@ -12,6 +12,7 @@ import pytest
 
 from belief.cli import main
 from plugins.video_tracking import grid
+from plugins.video_tracking.errors import TrackingError
 from plugins.video_tracking.experiment import (
     Cell,
     ExperimentError,
@@ -323,6 +324,91 @@ def test_a_recorded_video_is_resolved_against_the_data_folder(tmp_path):
     assert Path(experiment.sequences[0].video) == (data / "crossing.avi").resolve()
     result = run_experiment(experiment, tmp_path / "out", workers=1, progress=False)
     assert result.results[0]["frames"] == 20 and result.results[0]["num_objects"] == 40
+
+
+def write_gt_as_detections(path: Path, gt: np.ndarray) -> Path:
+    """Every ground-truth box as a detection of score 1 (MOTChallenge det rows, 1-based corners)."""
+    lines = [f"{int(r[0])},-1,{r[2]},{r[3]},{r[4]},{r[5]},1,-1,-1,-1" for r in gt]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+@pytest.fixture(scope="module")
+def recorded_with_detections(tmp_path_factory):
+    """A 20-frame crossing written as a video, its ground truth and detections made from it."""
+    from plugins.video_tracking import scenes
+
+    scene = scenes.render(scenes.crossing())
+    data = tmp_path_factory.mktemp("detections")
+    gt = scene.ground_truth[scene.ground_truth[:, 0] <= 20]
+    scenes.write_video(data / "crossing.avi", scene.frames[:20])
+    scenes.write_gt(data / "gt.txt", gt)
+    write_gt_as_detections(data / "det.txt", gt)
+    return data
+
+
+def test_a_sequence_with_detections_is_tracked_automatically_from_them(recorded_with_detections, tmp_path):
+    data = recorded_with_detections
+    config = tmp_path / "grid.toml"
+    config.write_text('seeds = [0]\ntracker = { particles = 15 }\n'
+                      '[[sequences]]\nname = "recorded"\nvideo = "crossing.avi"\ngt = "gt.txt"\n'
+                      'detections = "det.txt"\ninit = "automatic"\n'
+                      '[[methods]]\nname = "default"\n', encoding="utf-8")
+    experiment = load_experiment(config, data_dir=data)
+    sequence = experiment.sequences[0]
+    assert Path(sequence.detections) == (data / "det.txt").resolve()
+    assert len(sequence.load_detections()) == 40
+    cell = experiment.cells()[0]
+    assert cell.config().cues == ("colour", "location", "foreground", "detections")
+    assert cell.config().initiation is not None and cell.config().warm_up == 50
+    result = run_experiment(experiment, tmp_path / "out", workers=1, progress=False)
+    row = result.results[0]
+    assert row["frames"] == 20 and row["num_objects"] == 40
+    assert row["cues"] == "colour+location+foreground+detections"
+    assert row["mota"] >= 0.9
+    assert json.loads((tmp_path / "out" / "experiment.json").read_text())["sequences"][0]["detections"] \
+        == sequence.detections
+
+
+def test_detections_add_their_cue_once_and_leave_other_sequences_keys_alone(tmp_path):
+    det = write_gt_as_detections(tmp_path / "det.txt", np.array([[1, 1, 10, 10, 10, 20, 1, -1, -1, -1]]))
+    experiment = experiment_from_mapping({
+        "seeds": [0],
+        "sequences": [{"name": "crossing", "scene": "crossing"},
+                      {"name": "with boxes", "scene": "crossing", "detections": "det.txt", "init": "automatic"}],
+        "methods": [{"name": "colour", "cues": ["colour"]}, {"name": "both", "cues": ["detections", "colour"]},
+                    {"name": "default"}]}, base_dir=tmp_path)
+    plain, with_boxes = experiment.cells()[:3], experiment.cells()[3:]
+    assert [c.config().cues for c in plain] == [("colour",), ("detections", "colour"),
+                                                ("colour", "location", "foreground")]
+    assert [c.config().cues for c in with_boxes] == [("colour", "detections"), ("detections", "colour"),
+                                                     ("colour", "location", "foreground", "detections")]
+    assert with_boxes[0].sequence.detections == str(det.resolve())
+    # The key of a cell without detections is the one it had before sequences could have them.
+    assert "detections" not in plain[0].sequence.record()
+    assert experiment_from_mapping(SMALL).cells()[0].key == "crossing__r_rule__seed0__0e52648d2a3e"
+    assert len({c.key for c in experiment.cells()}) == 6
+
+
+def test_a_bad_detection_file_is_named(tmp_path):
+    with pytest.raises(ExperimentError, match=r"sequence 'v': detections file not found: .*nothing\.txt"):
+        experiment_from_mapping({"sequences": [{"name": "v", "scene": "crossing", "detections": "nothing.txt"}]},
+                                base_dir=tmp_path)
+    missing = SequenceSpec("v", scene="crossing", frames=5, detections=str(tmp_path / "gone.txt"))
+    with pytest.raises(TrackingError, match=r"gone\.txt") as info:
+        run_cell(Cell(missing, MethodSpec("default"), 0, (("particles", 5),)))
+    assert "\n" not in str(info.value)
+    # a box after the scene's last frame (100) or wholly outside its 320 x 240 frames
+    late = tmp_path / "late.txt"
+    late.write_text("1,-1,10,10,10,20,0.9\n101,-1,10,10,10,20,0.9\n", encoding="utf-8")
+    with pytest.raises(TrackingError, match=r"late\.txt, line 2"):
+        SequenceSpec("v", scene="crossing", frames=5, detections=str(late)).load_detections()
+    outside = tmp_path / "outside.txt"
+    outside.write_text("1,-1,400,10,10,20,0.9\n", encoding="utf-8")
+    with pytest.raises(TrackingError, match=r"outside\.txt, line 1"):
+        SequenceSpec("v", scene="crossing", detections=str(outside)).load_detections()
+    with pytest.raises(ExperimentError, match="detections must be the path of a detection file"):
+        SequenceSpec("v", scene="crossing", detections=3)
 
 
 def test_the_cli_reports_a_bad_file_in_one_line(tmp_path, capsys):
