@@ -79,8 +79,9 @@ _MEDIAN_MIN_FRAMES = 5
 #: At most this many warm-up frames propose a background colour where the median is doubtful.
 _MODE_CANDIDATES = 50
 
-#: Median of a chi-square variable with 1 and with 3 degrees of freedom: a robust noise
-#: variance is the median of the squared colour distances divided by it.
+#: Median of a chi-square variable with 1 and with 3 degrees of freedom: a robust per-channel
+#: noise variance is the median of the squared colour distances divided by it.  (Channel
+#: sums would not do: the noise of a compressed video is much the same in every channel.)
 _CHI2_MEDIAN = {1: 0.4549, 3: 2.3660}
 
 
@@ -245,7 +246,8 @@ class BackgroundModel:
         self._small: tuple[int, int] | None = None         # (H, W) the mixtures see
         self._labels: np.ndarray | None = None             # MOG2's per-frame output, reused
         self._step = 1                                     # of the grid the gain is measured on
-        self._reference: np.ndarray | None = None          # the background on the grid, (C, h, w) float32
+        self._reference: np.ndarray | None = None          # the background's channel sums on the grid, (h, w)
+        self._channels = 3
         self._was_foreground: np.ndarray | None = None     # the last mask on the grid
         self._background: np.ndarray | None = None         # the mixtures' background image, for protected pixels
         self._background_age = 0
@@ -295,13 +297,13 @@ class BackgroundModel:
         if protect is not None and scale > 1:
             protect = protect[scale // 2::scale, scale // 2::scale][:image.shape[0], :image.shape[1]]
         config = self.config
-        sample = self._sample(image)
+        sample, brightest = self._sample(image)
         mature = self.frames_seen >= _MATURE_FRAMES
         if config.compensate_gain:
-            self.gain = self._estimate_gain(sample)
+            self.gain = self._estimate_gain(sample, brightest)
             if abs(self.gain - 1.0) > _GAIN_TOLERANCE:
                 image = cv2.convertScaleAbs(image, alpha=1.0 / self.gain)
-                sample = sample / np.float32(self.gain)
+                sample /= np.float32(self.gain)
         relearning = self._relearn_left > 0
         rate = self._rate(relearning)
 
@@ -312,7 +314,7 @@ class BackgroundModel:
             cv2.copyTo(background, np.ascontiguousarray(protect).view(np.uint8), composite)
             labels = self._subtractor.apply(composite, self._labels, learningRate=rate)
             mask = labels == _MOG2_FOREGROUND
-            mask.reshape(-1)[protected] = self._differs(image, background, protected, sample)
+            mask.reshape(-1)[protected] = self._differs(image, background, protected)
         else:
             labels = self._subtractor.apply(image, self._labels, learningRate=rate)
             mask = labels == _MOG2_FOREGROUND
@@ -365,20 +367,15 @@ class BackgroundModel:
             return len(frames)
         median = _median(frames)
         if self.config.compensate_gain:
-            gains = [self._gain_against(self._sample(frame), self._sample(median)) for frame in frames]
+            reference = self._sample(median)[0]
+            gains = [self._gain_against(*self._sample(frame), reference, self._channels) for frame in frames]
             if max(abs(g - 1.0) for g in gains) > _GAIN_TOLERANCE:
                 # The median of frames under different light is no background: take it again
                 # from frames brought to one light.
                 frames = [frame if abs(g - 1.0) <= _GAIN_TOLERANCE else cv2.convertScaleAbs(frame, alpha=1.0 / g)
                           for frame, g in zip(frames, gains)]
                 median = _median(frames)
-        channels = 1 if median.ndim == 2 else 3
-        step = self._step
-        grid = np.stack([frame[step // 2::step, step // 2::step] for frame in frames]).astype(np.float32)
-        spread = grid - median[step // 2::step, step // 2::step].astype(np.float32)
-        spread = _squares(spread.reshape(len(frames), -1, channels))
-        noise = np.clip(float(np.median(spread)) / _CHI2_MEDIAN[channels],
-                        self._subtractor.getVarMin(), self._subtractor.getVarMax())
+        noise = self._noise_variance(frames, median, None)
         threshold = self.config.var_threshold * noise
         background = _mode_background(frames, median, threshold)
         for frame in frames:
@@ -387,7 +384,7 @@ class BackgroundModel:
             cv2.copyTo(background, moved.view(np.uint8), cleaned)
             self._learn(cleaned)
         if self._reference is None or self.frames_seen == len(frames):
-            self._reference = self._sample(background)
+            self._reference = self._sample(background)[0]
         self._was_foreground = None
         self._mean_gain = None
         return len(frames)
@@ -427,34 +424,40 @@ class BackgroundModel:
         schedule = 1.0 / min(self.frames_seen + 1, self.config.history) if configured is None else configured
         return max(float(schedule), 1.0 / self.config.relearn_frames)
 
-    def _sample(self, image: np.ndarray) -> np.ndarray:
-        """The pixels of the gain's grid, channels first: (C, h, w) float32."""
+    def _sample(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The grid's pixels: their channel sums (h, w) float32, and their brightest channels (h, w)."""
         step = self._step
         grid = image[step // 2::step, step // 2::step]
-        # Channels first: numpy reduces over a short last axis slowly, over the first one fast.
-        grid = np.moveaxis(grid, 2, 0) if grid.ndim == 3 else grid[None]
-        return np.ascontiguousarray(grid, dtype=np.float32)
+        if grid.ndim == 2:
+            self._channels = 1
+            return grid.astype(np.float32), grid
+        # Channel by channel: numpy reduces over a short last axis far more slowly.
+        blue, green, red = grid[:, :, 0], grid[:, :, 1], grid[:, :, 2]
+        total = blue.astype(np.float32)
+        total += green
+        total += red
+        return total, np.maximum(np.maximum(blue, green), red)
 
-    def _estimate_gain(self, sample: np.ndarray) -> float:
+    def _estimate_gain(self, sample: np.ndarray, brightest: np.ndarray) -> float:
         """The frame's brightness relative to the background, from the grid pixels that were background."""
         if self._reference is None:
             self._reference = sample.copy()
             return 1.0
         usable = None if self._was_foreground is None else ~self._was_foreground
-        return self._gain_against(sample, self._reference, usable, default=self.gain)
+        return self._gain_against(sample, brightest, self._reference, self._channels, usable, default=self.gain)
 
     @staticmethod
-    def _gain_against(sample: np.ndarray, reference: np.ndarray, usable: np.ndarray | None = None,
-                      default: float = 1.0) -> float:
+    def _gain_against(sample: np.ndarray, brightest: np.ndarray, reference: np.ndarray, channels: int,
+                      usable: np.ndarray | None = None, default: float = 1.0) -> float:
         """Median ratio of the grid's brightness to the reference's, over trustworthy pixels."""
-        fair = (reference.min(axis=0) > _DARK) & (sample.max(axis=0) < _BRIGHT) & (sample.min(axis=0) > 0)
+        fair = (reference > channels * _DARK) & (brightest < _BRIGHT) & (sample > channels * _DARK)
         chosen = fair if usable is None else fair & usable
         # When most of the grid was foreground the previous mask is no guide: all fair pixels vote.
         if np.count_nonzero(chosen) < max(16, np.count_nonzero(fair) // 4):
             chosen = fair
         if np.count_nonzero(chosen) < 16:
             return default
-        ratios = sample.sum(axis=0)[chosen] / reference.sum(axis=0)[chosen]
+        ratios = sample[chosen] / reference[chosen]
         return _middle(ratios)
 
     def _gain_swing(self, mature: bool) -> bool:
@@ -482,14 +485,14 @@ class BackgroundModel:
             self._background_age = 0
         return self._background
 
-    def _differs(self, image: np.ndarray, background: np.ndarray, pixels: np.ndarray, sample: np.ndarray) -> np.ndarray:
+    def _differs(self, image: np.ndarray, background: np.ndarray, pixels: np.ndarray) -> np.ndarray:
         """MOG2's test against the background image alone, for the protected pixels (flat indices)."""
         channels = 1 if image.ndim == 2 else 3
         # One flat take per image gives the channels first, (C, n), at a tenth of a row gather's cost.
         flat = pixels * channels + np.arange(channels)[:, None]
         values = image.reshape(-1).take(flat).astype(np.float32)
         means = background.reshape(-1).take(flat).astype(np.float32)
-        threshold = self.config.var_threshold * self._noise_variance(sample)
+        threshold = self.config.var_threshold * self._noise_variance([image], background, self._was_foreground)
         foreground = ((values - means) ** 2).sum(axis=0) > threshold
         if self.config.detect_shadows:
             # MOG2's shadow: a darker copy of the background, a·μ with τ ≤ a ≤ 1, within the threshold.
@@ -500,11 +503,18 @@ class BackgroundModel:
             foreground &= ~shadow
         return foreground
 
-    def _noise_variance(self, sample: np.ndarray) -> float:
-        """Per-channel noise variance of the frame about the background, from the grid (MOG2's bounds)."""
-        background = ~self._was_foreground if self._was_foreground is not None else slice(None)
-        distances = ((sample - self._reference) ** 2).sum(axis=0)[background]
-        variance = _middle(distances) / _CHI2_MEDIAN[sample.shape[0]] if distances.size else 0.0
+    def _noise_variance(self, frames: list[np.ndarray], background: np.ndarray,
+                        foreground: np.ndarray | None) -> float:
+        """Per-channel noise variance of frames about the background, on the grid, in MOG2's bounds."""
+        step = self._step
+        reference = background[step // 2::step, step // 2::step].astype(np.float32)
+        distances = []
+        for frame in frames:
+            difference = frame[step // 2::step, step // 2::step].astype(np.float32) - reference
+            distance = difference * difference if difference.ndim == 2 else _squares(difference)
+            distances.append(distance if foreground is None else distance[~foreground])
+        distances = np.concatenate([d.reshape(-1) for d in distances])
+        variance = _middle(distances) / _CHI2_MEDIAN[self._channels] if distances.size else 0.0
         return float(np.clip(variance, self._subtractor.getVarMin(), self._subtractor.getVarMax()))
 
 
