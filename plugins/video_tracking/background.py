@@ -251,6 +251,7 @@ class BackgroundModel:
         self._was_foreground: np.ndarray | None = None     # the last mask on the grid
         self._background: np.ndarray | None = None         # the mixtures' background image, for protected pixels
         self._background_age = 0
+        self._noise: float | None = None                   # per-channel noise variance, for protected pixels
         self._mean_gain: float | None = None
         self._relearn_left = 0
         self.frames_seen = 0
@@ -483,6 +484,7 @@ class BackgroundModel:
         if self._background is None or force or self._background_age >= _BACKGROUND_REFRESH:
             self._background = np.ascontiguousarray(self._subtractor.getBackgroundImage())
             self._background_age = 0
+            self._noise = None
         return self._background
 
     def _differs(self, image: np.ndarray, background: np.ndarray, pixels: np.ndarray) -> np.ndarray:
@@ -492,7 +494,10 @@ class BackgroundModel:
         flat = pixels * channels + np.arange(channels)[:, None]
         values = image.reshape(-1).take(flat).astype(np.float32)
         means = background.reshape(-1).take(flat).astype(np.float32)
-        threshold = self.config.var_threshold * self._noise_variance([image], background, self._was_foreground)
+        if self._noise is None:
+            # The noise changes slowly: measured again with each new background image.
+            self._noise = self._noise_variance([image], background, self._was_foreground)
+        threshold = self.config.var_threshold * self._noise
         foreground = ((values - means) ** 2).sum(axis=0) > threshold
         if self.config.detect_shadows:
             # MOG2's shadow: a darker copy of the background, a·μ with τ ≤ a ≤ 1, within the threshold.
