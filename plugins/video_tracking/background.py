@@ -14,11 +14,12 @@ this edge: the cues that use the mask are numpy only.
 Without detections the mask is all that finds people, so four things keep it usable:
 
 * **A warm-up from the median.**  :meth:`BackgroundModel.warm_up` takes the per-pixel
-  median of its frames (spread over the video) as a first background, and replaces the
-  pixels of each frame that differ from it before the mixtures learn from them.  People
-  who are in view in every frame, but never long at one place, then stay foreground;
-  fed as they are, with MOG2's fast schedule of the first frames, they would become
-  part of the background.
+  median of its frames (spread over the video) as a first background, or, where people
+  cover a pixel in more than half of them, the colour that most frames share; it
+  replaces the pixels of each frame that differ from it before the mixtures learn from
+  them.  People who are in view in every frame, but never long at one place, then stay
+  foreground; fed as they are, with MOG2's fast schedule of the first frames, they would
+  become part of the background.
 * **Gain compensation.**  Each frame is divided by its brightness relative to the
   background (the median ratio over a sparse grid of pixels that were background in
   the previous frame) before the mixtures see it, so that the sun coming out or the
@@ -336,11 +337,13 @@ class BackgroundModel:
         """Learn the background from frames (typically spread over the video); returns how many.
 
         With ``median_warm_up`` and at least five frames, the per-pixel median of the
-        frames (each divided by its gain) is the first background, and the pixels of each
-        frame that differ from it by more than the mixtures' threshold are replaced by it
-        before the mixtures learn the frame: people who walk about in every frame are not
-        learnt.  The masks are dropped: while the model is young they mark most changes as
-        foreground.
+        frames (each divided by its gain) is the first background; where fewer than half
+        the frames are within the mixtures' threshold of it, the mean of the largest group
+        of frames that agree is taken instead.  The pixels of each frame that differ from
+        this background by more than the threshold are replaced by it before the mixtures
+        learn the frame: people who walk about in every frame are not learnt.  The masks
+        are dropped: while the model is young they mark most changes as foreground.
+        This costs about a second for 50 frames of 480 × 360 (three MOG2 frames each).
 
         Examples
         --------
