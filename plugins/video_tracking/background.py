@@ -343,7 +343,7 @@ class BackgroundModel:
         this background by more than the threshold are replaced by it before the mixtures
         learn the frame: people who walk about in every frame are not learnt.  The masks
         are dropped: while the model is young they mark most changes as foreground.
-        This costs about a second for 50 frames of 480 × 360 (three MOG2 frames each).
+        This costs about a second for 50 frames of 480 × 360.
 
         Examples
         --------
