@@ -26,23 +26,38 @@ busy is not plain.
 Two parts:
 
 (a) PETS 2009 S2.L1, frames 1-200 (480x360, 8 people, 3-8 per frame): the directory
-    ``shared/data/pets09_s2l1_f0001_0200`` next to the repository (``video.avi`` and
-    ``gt.txt``), or ``--data DIR``.  The targets are born and removed as with
-    ``belief track --init-from-gt`` (``init_from_gt(gt.txt)``), with
-    ``TrackerConfig(particles=100)``: the cues colour, location and foreground and the
-    default rule.  Two figures, each in a fresh (spawned) process:
+    ``shared/data/pets09_s2l1_f0001_0200`` next to the repository (``video.avi``,
+    ``gt.txt`` and ``det.txt``), or ``--data DIR``.  ``TrackerConfig(particles=100)``: the
+    cues colour, location and foreground and the default rule.  The tracks start in three
+    ways, each measured in its own fresh (spawned) process:
 
-    * tracking fps (decoding excluded): every frame is decoded into memory first, then
-      only ``Tracker.step`` is timed, over all frames; the median and the slowest frame
-      are taken over the frames after the first 5, which leaves out the first fusion
-      frame and the births of the first frame;
-    * overall fps (decoding included): the clock runs from opening the video with
-      ``VideoReader`` until the last frame has been decoded and tracked.
+    * init from GT: the targets are born and removed as with ``belief track --init-from-gt``
+      (``init_from_gt(gt.txt)``);
+    * automatic + det.txt: ``belief track VIDEO --detections det.txt`` (the ``detections``
+      configuration of ``benchmarks/accuracy_pets.py``): no init file, the MOT15 public
+      detections of ``det.txt`` given to the tracker frame by frame and the detections cue
+      fused after the default cues, the default settings otherwise;
+    * automatic: ``belief track VIDEO`` (the ``automatic`` configuration): no init file,
+      tracks started on foreground blobs.
+
+    Both automatic runs first let the background model learn from 50 frames spread over the
+    clip (``Tracker.warm_up``), before the clock starts.  Their settings are built as a cell
+    of ``belief experiment`` builds them (``Cell.config()``).
+
+    * tracking fps (decoding excluded), for each of the three: every frame is decoded into
+      memory first (and, with det.txt, the file is read), then only ``Tracker.step`` is
+      timed, over all frames; the median and the slowest frame are taken over the frames
+      after the first 5, which leaves out the first fusion frame and the births of the
+      first frame;
+    * overall fps (decoding included), init from GT only: the clock runs from opening the
+      video with ``VideoReader`` until the last frame has been decoded and tracked.
 
     The mean number of live targets per frame and the minor page faults per frame after the
     first 5 (memory the process touches for the first time: the allocator handing back and
-    mapping anew its large blocks) are printed as well.  Without the data the part
-    is skipped and so are its targets.
+    mapping anew its large blocks) are printed as well, and the tracking fps of the two
+    automatic runs over that of init from GT in the same condition.  Without the data the
+    part is skipped and so are its targets; without ``det.txt`` only the run with
+    detections and its target are.
 
 (b) Synthetic scaling: 640x480 scenes of 30 frames (``scenes.SceneConfig``) with τ = 1, 2,
     4, 8, 16, 32 people on a grid, each walking slowly in its own direction in its own
@@ -55,19 +70,23 @@ Two parts:
 
 Targets, each checked under both conditions:
 
-* (a) at least 100 frames per second of tracking (decoding excluded) on the PETS sequence;
-* (a) the slowest PETS frame after the first 5 takes at most 4 times the median frame;
+* (a) init from GT: at least 100 frames per second of tracking (decoding excluded);
+* (a) automatic + det.txt: at least 100 frames per second of tracking (decoding and
+  warm-up excluded);
+* (a) automatic: at least 50 frames per second of tracking (decoding and warm-up excluded);
+* (a) init from GT: the slowest frame after the first 5 takes at most 4 times the median
+  frame;
 * (b) the time per frame grows no faster than linearly in τ·N.  At small τ the fixed costs
   of a frame dominate (the background model, the image-wide work of the cues), so the check
   is made at the large-τ end: the time per frame per (τ·N) at τ = 32 is at most 1.5 times
   its value at τ = 8.  Equivalently, t(32) / t(8) <= 6, a log-log slope of at most 1.29.
 
-``--quick`` tracks the first 60 PETS frames and τ = 2, 8, 32 with 15 frames each (median
-over the last 10); it is a smoke run and the targets are skipped.  ``--repeat N`` runs every
-measurement N times, each in its own fresh process, and keeps the fastest: on a machine
-that other work loads now and then, a single run can catch that work in one measurement
-and not in the next.  A full run of both
-conditions takes about two minutes on a 2-core machine.
+``--quick`` tracks the first 60 PETS frames (the automatic runs' warm-up is spread over
+those) and τ = 2, 8, 32 with 15 frames each (median over the last 10); it is a smoke run
+and the targets are skipped.  ``--repeat N`` runs every measurement N times, each in its
+own fresh process, and keeps the fastest: on a machine that other work loads now and then,
+a single run can catch that work in one measurement and not in the next.  A full run of
+both conditions takes a few minutes on a 2-core machine.
 """
 
 from __future__ import annotations
@@ -102,7 +121,9 @@ FULL = {"pets_frames": None, "taus": (1, 2, 4, 8, 16, 32), "scene_frames": 30, "
 QUICK = {"pets_frames": 60, "taus": (2, 8, 32), "scene_frames": 15, "skip_frames": 5}
 
 # Targets.
-MIN_FPS = 100.0
+MIN_FPS = 100.0                            # PETS, tracks born from the ground truth
+MIN_FPS_DETECTIONS = 100.0                 # PETS, automatic with det.txt
+MIN_FPS_AUTOMATIC = 50.0                   # PETS, automatic without detections
 MAX_SLOWEST = 4.0                          # slowest frame / median frame, PETS, after the first frames
 TAU_LOW, TAU_HIGH, MAX_GROWTH = 8, 32, 1.5
 MAX_SLOPE = 1.0 + math.log(MAX_GROWTH) / math.log(TAU_HIGH / TAU_LOW)
@@ -133,13 +154,18 @@ def minor_faults() -> int | None:
     return None if resource is None else resource.getrusage(resource.RUSAGE_SELF).ru_minflt
 
 
-def timed_steps(tracker, frames) -> tuple[list[float], list[int], list[int] | None]:
-    """``Tracker.step`` on every frame: the time of each, the live targets and the page faults of each."""
+def timed_steps(tracker, frames, detections=None) -> tuple[list[float], list[int], list[int] | None]:
+    """``Tracker.step`` on every frame: the time of each, the live targets and the page faults of each.
+
+    ``detections`` (a :class:`~plugins.video_tracking.detections.Detections`, optional) gives
+    each frame its boxes, looked up before the clock starts.
+    """
     times, live, faults = [], [], []
     for index, image in enumerate(frames):
+        boxes = None if detections is None else detections.at(index + 1)
         before = minor_faults()
         start = time.perf_counter()
-        tracker.step(index + 1, image)
+        tracker.step(index + 1, image, boxes)
         times.append(time.perf_counter() - start)
         live.append(len(tracker.targets))
         if before is not None:
@@ -159,16 +185,10 @@ def frame_statistics(times: list[float], faults: list[int] | None, skip: int) ->
 
 
 # -- (a) PETS -----------------------------------------------------------------------------------------
-def pets_tracking_only(data: str, max_frames: int | None, skip: int, seed: int) -> dict:
-    """Runs in a fresh process: decode every frame into memory, then time ``Tracker.step`` alone."""
-    import numpy as np
-
-    from plugins.video_tracking.config import TrackerConfig
-    from plugins.video_tracking.initiation import init_from_gt
-    from plugins.video_tracking.tracker import Tracker
+def decode_pets(folder: Path, max_frames: int | None) -> tuple[list, float]:
+    """The frames of the PETS video (the first ``max_frames``), decoded into memory, and the decoding time."""
     from plugins.video_tracking.video import VideoReader
 
-    folder = Path(data)
     frames = []
     with VideoReader(folder / "video.avi") as reader:
         for image in reader:
@@ -176,11 +196,61 @@ def pets_tracking_only(data: str, max_frames: int | None, skip: int, seed: int) 
             if max_frames is not None and len(frames) == max_frames:
                 break
         decode_seconds = reader.decode_seconds
+    return frames, decode_seconds
+
+
+def pets_tracking_only(data: str, max_frames: int | None, skip: int, seed: int) -> dict:
+    """Runs in a fresh process: decode every frame into memory, then time ``Tracker.step`` alone."""
+    import numpy as np
+
+    from plugins.video_tracking.config import TrackerConfig
+    from plugins.video_tracking.initiation import init_from_gt
+    from plugins.video_tracking.tracker import Tracker
+
+    folder = Path(data)
+    frames, decode_seconds = decode_pets(folder, max_frames)
     tracker = Tracker(TrackerConfig(particles=PARTICLES), init_from_gt(folder / "gt.txt"), np.random.default_rng(seed))
     times, live, faults = timed_steps(tracker, frames)
     height, width = frames[0].shape[:2]
     return {"frames": len(frames), "width": width, "height": height, "tracking_s": sum(times),
             **frame_statistics(times, faults, skip), "decode_s": decode_seconds,
+            "mean_live": sum(live) / len(live), "min_live": min(live), "max_live": max(live)}
+
+
+def pets_automatic(data: str, max_frames: int | None, skip: int, seed: int, with_detections: bool) -> dict:
+    """Runs in a fresh process: automatic tracking (no init file), with det.txt or without, warm-up untimed.
+
+    The settings are those of ``belief track VIDEO [--detections det.txt]`` and of the
+    ``detections`` and ``automatic`` configurations of ``benchmarks/accuracy_pets.py`` (a cell
+    of ``belief experiment``): the default settings with N particles, automatic initiation,
+    a background warm-up on 50 frames spread over the clip and, with det.txt, the detections
+    cue after the default cues.  The frames are decoded into memory first; the warm-up runs
+    before the clock starts; then only ``Tracker.step`` is timed, over all frames.
+    """
+    import numpy as np
+
+    from plugins.video_tracking.experiment import Cell, MethodSpec, SequenceSpec
+    from plugins.video_tracking.sources import open_source
+    from plugins.video_tracking.tracker import Tracker
+
+    folder = Path(data)
+    frames, decode_seconds = decode_pets(folder, max_frames)
+    sequence = SequenceSpec("PETS09 S2.L1", video=str(folder / "video.avi"), gt=str(folder / "gt.txt"),
+                            init="automatic", detections=str(folder / "det.txt") if with_detections else None)
+    cell = Cell(sequence, MethodSpec("default"), seed, (("particles", PARTICLES),))
+    config = cell.config()
+    detections = sequence.load_detections()
+    tracker = Tracker(config, None, np.random.default_rng(seed))
+    warm_up_start = time.perf_counter()
+    warm_up_frames = 0
+    if config.warm_up > 0 and tracker.background is not None:
+        with open_source(np.stack(frames)) as source:
+            warm_up_frames = tracker.warm_up(source.spread(config.warm_up))
+    warm_up_seconds = time.perf_counter() - warm_up_start
+    times, live, faults = timed_steps(tracker, frames, detections)
+    return {"frames": len(frames), "tracking_s": sum(times), **frame_statistics(times, faults, skip),
+            "decode_s": decode_seconds, "warm_up_frames": warm_up_frames, "warm_up_s": warm_up_seconds,
+            "cues": list(config.cues), "detections": None if detections is None else len(detections),
             "mean_live": sum(live) / len(live), "min_live": min(live), "max_live": max(live)}
 
 
@@ -304,27 +374,42 @@ class BusyCore:
 
 
 # -- one condition ------------------------------------------------------------------------------------
-def measure(data: Path, pets_note: str | None, sizes: dict, seed: int, repeat: int, log) -> dict:
-    """Every measurement of the benchmark, each in a fresh process, as the machine is now."""
-    pets = None
-    if pets_note is None:
-        log("(a) PETS, tracking only")
+def measure(data: Path, notes: dict[str, str | None], sizes: dict, seed: int, repeat: int, log) -> dict:
+    """Every measurement of the benchmark, each in a fresh process, as the machine is now.
+
+    ``notes``: why the PETS measurements (``"pets"``) or the one with det.txt
+    (``"detections"``) cannot run, None when they can.
+    """
+    pets = pets_detections = pets_automatic_ = None
+    if notes["pets"] is None:
+        log("(a) PETS, init from ground truth, tracking only")
         pets = fastest(repeat, "tracking_s", pets_tracking_only, str(data), sizes["pets_frames"],
                        sizes["skip_frames"], seed)
-        log("(a) PETS, overall")
+        log("(a) PETS, init from ground truth, overall")
         overall = fastest(repeat, "overall_s", pets_overall, str(data), sizes["pets_frames"], seed)
         pets["tracking_fps"] = pets["frames"] / pets["tracking_s"]
         pets["overall_s"] = overall["overall_s"]
         pets["overall_fps"] = overall["frames"] / overall["overall_s"]
         pets["overall_decode_s"] = overall["decode_s"]
+        if notes["detections"] is None:
+            log("(a) PETS, automatic with det.txt, tracking only")
+            pets_detections = fastest(repeat, "tracking_s", pets_automatic, str(data), sizes["pets_frames"],
+                                      sizes["skip_frames"], seed, True)
+            pets_detections["tracking_fps"] = pets_detections["frames"] / pets_detections["tracking_s"]
+        log("(a) PETS, automatic, tracking only")
+        pets_automatic_ = fastest(repeat, "tracking_s", pets_automatic, str(data), sizes["pets_frames"],
+                                  sizes["skip_frames"], seed, False)
+        pets_automatic_["tracking_fps"] = pets_automatic_["frames"] / pets_automatic_["tracking_s"]
     rows = []
     for tau in sizes["taus"]:
         log(f"(b) τ = {tau}")
         rows.append(fastest(repeat, "frame_s", synthetic, tau, sizes["scene_frames"], sizes["skip_frames"], seed))
-    return {"pets": pets, "synthetic": rows, "scaling": scaling(rows)}
+    return {"pets": pets, "pets_detections": pets_detections, "pets_automatic": pets_automatic_,
+            "synthetic": rows, "scaling": scaling(rows)}
 
 
-def run_condition(name: str, data: Path, pets_note: str | None, sizes: dict, seed: int, repeat: int, log) -> dict:
+def run_condition(name: str, data: Path, notes: dict[str, str | None], sizes: dict, seed: int, repeat: int,
+                  log) -> dict:
     load_average = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
 
     def log_condition(message):
@@ -332,10 +417,10 @@ def run_condition(name: str, data: Path, pets_note: str | None, sizes: dict, see
 
     if name == "loaded":
         with BusyCore() as load:
-            result = measure(data, pets_note, sizes, seed, repeat, log_condition)
+            result = measure(data, notes, sizes, seed, repeat, log_condition)
         result["load_core_share"] = load.core_share
     else:
-        result = measure(data, pets_note, sizes, seed, repeat, log_condition)
+        result = measure(data, notes, sizes, seed, repeat, log_condition)
         result["load_core_share"] = None
     result["load_average_at_start"] = load_average
     return result
@@ -353,13 +438,15 @@ def scaling(rows: list[dict]) -> dict | None:
 
 
 TARGETS = (
-    ("fps", f"(a) PETS tracking, decoding excluded, >= {MIN_FPS:g} fps", " fps"),
-    ("slowest", f"(a) PETS slowest frame <= {MAX_SLOWEST:g} x median (after frame 5)", "x"),
+    ("fps", f"(a) PETS, init from GT: tracking >= {MIN_FPS:g} fps", " fps"),
+    ("fps_detections", f"(a) PETS, automatic + det.txt: tracking >= {MIN_FPS_DETECTIONS:g} fps", " fps"),
+    ("fps_automatic", f"(a) PETS, automatic: tracking >= {MIN_FPS_AUTOMATIC:g} fps", " fps"),
+    ("slowest", f"(a) PETS, init from GT: slowest frame <= {MAX_SLOWEST:g} x median (frames 6 on)", "x"),
     ("scaling", f"(b) time per (τ·N) at τ = {TAU_HIGH} <= {MAX_GROWTH:g} x at τ = {TAU_LOW}", "x"),
 )
 
 
-def targets(condition: str, result: dict, quick: bool, pets_note: str | None) -> list[dict]:
+def targets(condition: str, result: dict, quick: bool, notes: dict[str, str | None]) -> list[dict]:
     found = []
 
     def target(key, value, ok, skip=None):
@@ -367,10 +454,14 @@ def targets(condition: str, result: dict, quick: bool, pets_note: str | None) ->
         found.append({"target": dict((k, n) for k, n, _ in TARGETS)[key], "key": key, "condition": condition,
                       "value": value, "status": status, "note": skip})
 
+    pets_skip = notes["pets"] or ("--quick" if quick else None)
+    for key, part, minimum, skip in (("fps", "pets", MIN_FPS, pets_skip),
+                                     ("fps_detections", "pets_detections", MIN_FPS_DETECTIONS,
+                                      pets_skip or notes["detections"]),
+                                     ("fps_automatic", "pets_automatic", MIN_FPS_AUTOMATIC, pets_skip)):
+        fps = result[part] and result[part]["tracking_fps"]
+        target(key, fps, fps is not None and fps >= minimum, skip)
     pets = result["pets"]
-    pets_skip = pets_note or ("--quick" if quick else None)
-    fps = pets and pets["tracking_fps"]
-    target("fps", fps, fps is not None and fps >= MIN_FPS, pets_skip)
     slowest = pets and pets["slowest_ratio"]
     target("slowest", slowest, slowest is not None and slowest <= MAX_SLOWEST, pets_skip)
     grow = result["scaling"]
@@ -396,40 +487,69 @@ def number(value, fmt: str, missing: str = "-") -> str:
     return missing if value is None else format(value, fmt)
 
 
-def print_report(results: dict[str, dict], pets_note: str | None, found: list[dict], sizes: dict) -> None:
+PETS_MODES = (("pets", "init from GT"), ("pets_detections", "automatic + det.txt"), ("pets_automatic", "automatic"))
+
+
+def print_report(results: dict[str, dict], notes: dict[str, str | None], found: list[dict], sizes: dict) -> None:
     names = list(results)
     print("Conditions: " + "; ".join(
         f"{n}: load average {number(r['load_average_at_start'], '.2f')} at the start"
         + ("" if n != "loaded" else f", the busy process used {number(r['load_core_share'], '.0%')} of a core")
         for n, r in results.items()))
     print()
-    print(f"(a) PETS 2009 S2.L1, init from ground truth, {PARTICLES} particles per target, "
-          "cues colour, location, foreground, rule r_rule")
-    if pets_note is not None:
-        print(f"    skipped: {pets_note}")
+    print(f"(a) PETS 2009 S2.L1, {PARTICLES} particles per target, rule r_rule; three ways for the tracks to start:")
+    if notes["pets"] is not None:
+        print(f"    skipped: {notes['pets']}")
     else:
-        first = results[names[0]]["pets"]
-        print(f"    {first['frames']} frames of {first['width']}x{first['height']}; live targets per frame: "
-              f"mean {first['mean_live']:.2f} (min {first['min_live']}, max {first['max_live']})")
-        header = [("", 34)]
+        first = results[names[0]]
+        modes = [(key, label) for key, label in PETS_MODES if first[key] is not None]
+        print("    init from GT: born and removed as in gt.txt (init_from_gt), cues colour, location, foreground")
+        if first["pets_detections"] is not None:
+            detections = first["pets_detections"]
+            print(f"    automatic + det.txt: no init file, the {detections['detections']} boxes of det.txt, "
+                  f"cues {', '.join(detections['cues'])}")
+        else:
+            print(f"    automatic + det.txt: skipped ({notes['detections']})")
+        print(f"    automatic: no init file, cues {', '.join(first['pets_automatic']['cues'])}")
+        print(f"    (automatic: the background first learns from {first['pets_automatic']['warm_up_frames']} frames "
+              "spread over the clip, before the clock starts)")
+        print(f"    {first['pets']['frames']} frames of {first['pets']['width']}x{first['pets']['height']}; "
+              "live targets per frame:")
+        for key, label in modes:
+            print(f"      {label + ':':<20} mean {first[key]['mean_live']:.2f} (min {first[key]['min_live']}, "
+                  f"max {first[key]['max_live']})")
+        header = [("", 52)]
         for n in names:
             header += [(f"{n}: s", 10), ("fps", 7), ("ms/frame", 9)]
+        rows = [("init from GT, tracking only (decoding excluded)", "pets", "tracking_s"),
+                ("init from GT, overall (decoding included)", "pets", "overall_s"),
+                ("decoding alone", "pets", "decode_s")]
+        rows += [(f"{label}, tracking only (warm-up excluded)", key, "tracking_s")
+                 for key, label in modes if key != "pets"]
         lines = []
-        for label, seconds in (("tracking only (decoding excluded)", "tracking_s"),
-                               ("overall (decoding included)", "overall_s"), ("decoding alone", "decode_s")):
+        for label, key, seconds in rows:
             line = [label]
             for n in names:
-                pets = results[n]["pets"]
+                pets = results[n][key]
                 line += [f"{pets[seconds]:.2f}", f"{pets['frames'] / pets[seconds]:.1f}",
                          f"{1e3 * pets[seconds] / pets['frames']:.2f}"]
             lines.append(line)
-        print_table(header, lines)
+        print_table(header, lines, left=True)
         print(f"    tracking only, frames {sizes['skip_frames'] + 1} on:")
         for n in names:
-            pets = results[n]["pets"]
-            print(f"      {n:>6}: median frame {1e3 * pets['median_frame_s']:.2f} ms, "
-                  f"slowest {1e3 * pets['max_frame_s']:.2f} ms, slowest/median {pets['slowest_ratio']:.2f}; "
-                  f"page faults per frame {number(pets['faults_per_frame'], '.1f')}")
+            for k, (key, label) in enumerate(modes):
+                pets = results[n][key]
+                print(f"      {n if k == 0 else '':>6}  {label + ':':<20} "
+                      f"median frame {1e3 * pets['median_frame_s']:.2f} ms, "
+                      f"slowest {1e3 * pets['max_frame_s']:.2f} ms, slowest/median {pets['slowest_ratio']:.2f}; "
+                      f"page faults per frame {number(pets['faults_per_frame'], '.1f')}")
+        if len(modes) > 1:
+            def ratios(n):
+                base = results[n]["pets"]["tracking_fps"]
+                return ", ".join(f"{label} x{results[n][key]['tracking_fps'] / base:.2f}"
+                                 for key, label in modes if key != "pets")
+            print("    tracking fps over that of init from GT, in the same run: "
+                  + "; ".join(f"{n}: {ratios(n)}" for n in names))
     print()
     print(f"(b) synthetic {SCENE_WIDTH}x{SCENE_HEIGHT} scenes, {sizes['scene_frames']} frames, τ walkers, "
           f"N = {PARTICLES} particles per target, same cues and rule;")
@@ -457,7 +577,7 @@ def print_report(results: dict[str, dict], pets_note: str | None, found: list[di
                   f"log-log slope {grow['slope']:.2f} (target: <= {MAX_SLOPE:.2f})")
     print()
     print("Targets:")
-    header = [("", 60)] + [(n, 16) for n in names]
+    header = [("", 66)] + [(n, 16) for n in names]
     lines = []
     for key, label, unit in TARGETS:
         line = [label]
@@ -515,22 +635,25 @@ def main(argv: list[str] | None = None) -> int:
         print()
     start = time.perf_counter()
 
-    pets_note = None
+    notes: dict[str, str | None] = {"pets": None, "detections": None}
     data = args.data.resolve()
     if not ((data / "video.avi").is_file() and (data / "gt.txt").is_file()):
-        pets_note = f"no video.avi and gt.txt in {args.data}" if args.data != DEFAULT_DATA else \
+        notes["pets"] = f"no video.avi and gt.txt in {args.data}" if args.data != DEFAULT_DATA else \
             "the PETS sequence is absent (shared/data/pets09_s2l1_f0001_0200; --data DIR to give it)"
-        log(f"  (a) PETS skipped: {pets_note}")
+        log(f"  (a) PETS skipped: {notes['pets']}")
+    elif not (data / "det.txt").is_file():
+        notes["detections"] = f"no det.txt in {args.data}"
+        log(f"  (a) PETS with detections skipped: {notes['detections']}")
 
-    results = {name: run_condition(name, data, pets_note, sizes, args.seed, args.repeat, log) for name in conditions}
-    found = [t for name, result in results.items() for t in targets(name, result, args.quick, pets_note)]
+    results = {name: run_condition(name, data, notes, sizes, args.seed, args.repeat, log) for name in conditions}
+    found = [t for name, result in results.items() for t in targets(name, result, args.quick, notes)]
     if args.json:
         print(json.dumps({"python": platform.python_version(), "numpy": np.__version__, "opencv": cv2.__version__,
                           "cpus": os.cpu_count(), "quick": args.quick, "repeat": args.repeat, "sizes": sizes,
-                          "pets_note": pets_note,
+                          "pets_note": notes["pets"], "detections_note": notes["detections"],
                           "conditions": results, "targets": found}, indent=2))
     else:
-        print_report(results, pets_note, found, sizes)
+        print_report(results, notes, found, sizes)
         print(f"\n(total {time.perf_counter() - start:.0f} s)")
     failed = any(t["status"] == "FAIL" for t in found)
     return 1 if failed and args.check else 0
