@@ -518,14 +518,14 @@ def print_report(results: dict[str, dict], notes: dict[str, str | None], found: 
         for key, label in modes:
             print(f"      {label + ':':<20} mean {first[key]['mean_live']:.2f} (min {first[key]['min_live']}, "
                   f"max {first[key]['max_live']})")
-        header = [("", 52)]
-        for n in names:
-            header += [(f"{n}: s", 10), ("fps", 7), ("ms/frame", 9)]
         rows = [("init from GT, tracking only (decoding excluded)", "pets", "tracking_s"),
                 ("init from GT, overall (decoding included)", "pets", "overall_s"),
                 ("decoding alone", "pets", "decode_s")]
         rows += [(f"{label}, tracking only (warm-up excluded)", key, "tracking_s")
                  for key, label in modes if key != "pets"]
+        header = [("", max(len(label) for label, _, _ in rows))]
+        for n in names:
+            header += [(f"{n}: s", 10), ("fps", 7), ("ms/frame", 9)]
         lines = []
         for label, key, seconds in rows:
             line = [label]
