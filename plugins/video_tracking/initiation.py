@@ -303,7 +303,8 @@ class InitiationConfig:
         Two tracks whose boxes overlap with at least this IoU follow the same person ...
     duplicate_frames : int or None
         ... and when they do so for this many consecutive frames, the younger one (the
-        larger id) ends (default 0.5 and 15 frames, longer than two people take to cross);
+        larger id) ends (default 0.5 and 5 frames); a box at least 70 % inside an older
+        track's box counts as overlapping it (a fragment of a person already followed);
         None disables the rule.
     anywhere : bool
         Chains of candidates may start anywhere in the image (default True: people appear
@@ -348,7 +349,7 @@ class InitiationConfig:
     appearance_support: float | None = 0.8
     first_frame: bool = True
     duplicate_iou: float = 0.5
-    duplicate_frames: int | None = 15
+    duplicate_frames: int | None = 5
     anywhere: bool = True
     match_iou: float = 0.3
     memory: int = 50

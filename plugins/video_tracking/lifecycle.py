@@ -32,7 +32,10 @@ from plugins.video_tracking.association import UNASSIGNED
 from plugins.video_tracking.boxes import box_centres, intersections, iou
 from plugins.video_tracking.initiation import COVERED_FRACTION, InitiationConfig, foreground_fraction
 
-__all__ = ["Lifecycle", "FrameOutcome"]
+__all__ = ["Lifecycle", "FrameOutcome", "DUPLICATE_INSIDE"]
+
+#: A track whose box lies this much inside an older track's box counts as its duplicate.
+DUPLICATE_INSIDE = 0.7
 
 
 class FrameOutcome:
@@ -143,11 +146,15 @@ class Lifecycle:
         boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
         candidates = np.asarray(candidates, dtype=np.float64).reshape(-1, candidates.shape[1] if
                                                                        np.ndim(candidates) == 2 else 4)[:, :4]
-        supported = np.asarray(assigned) != UNASSIGNED
+        took = np.asarray(assigned) != UNASSIGNED
+        supported = took.copy()
+        # Foreground and appearance support a track only where no other track took a
+        # candidate: a second track on someone already followed sees their pixels too.
+        own = ~self._covered_by(boxes, took)
         if foreground is not None and len(boxes):
-            supported |= foreground_fraction(foreground, boxes) >= config.exit_foreground
+            supported |= own & (foreground_fraction(foreground, boxes) >= config.exit_foreground)
         if likeness is not None and config.appearance_support is not None and len(boxes):
-            supported |= np.asarray(likeness) >= config.appearance_support
+            supported |= own & (np.asarray(likeness) >= config.appearance_support)
         lost, ended = self._track_counters(ids, boxes, supported)
 
         taken = np.zeros(len(candidates), dtype=bool)
@@ -176,7 +183,12 @@ class Lifecycle:
         at_border = (centres[:, 0] < b) | (centres[:, 0] >= width - b) | (centres[:, 1] < b) \
             | (centres[:, 1] >= height - b)
         overlaps = iou(boxes, boxes) if len(ids) else np.zeros((0, 0))
-        duplicate = np.array([(overlaps[k, :k] >= config.duplicate_iou).any() for k in range(len(ids))], dtype=bool)
+        # A box mostly inside an older track's box follows the same person as much as one
+        # that overlaps it by IoU: a fragment (legs, a head) of someone already followed.
+        inside = intersections(boxes, boxes) / np.maximum(boxes[:, 2] * boxes[:, 3], 1e-12)[:, None] \
+            if len(ids) else np.zeros((0, 0))
+        twin = (overlaps >= config.duplicate_iou) | (inside >= DUPLICATE_INSIDE)
+        duplicate = np.array([twin[k, :k].any() for k in range(len(ids))], dtype=bool)
         unsupported, leaving, twins = {}, {}, {}
         lost, ended = [], []
         for k, track_id in enumerate(ids):
@@ -192,6 +204,16 @@ class Lifecycle:
                 unsupported[track_id], leaving[track_id], twins[track_id] = missed, out, twin
         self._unsupported, self._leaving, self._twins = unsupported, leaving, twins
         return lost, ended
+
+    @staticmethod
+    def _covered_by(boxes: np.ndarray, took: np.ndarray) -> np.ndarray:
+        """Whether at least half of each box lies in the box of another track that took a candidate."""
+        if len(boxes) < 2 or not took.any():
+            return np.zeros(len(boxes), dtype=bool)
+        inside = intersections(boxes, boxes[took])
+        others = np.flatnonzero(took)
+        inside[others, np.arange(len(others))] = 0.0          # a track does not cover itself
+        return (inside >= COVERED_FRACTION * (boxes[:, 2] * boxes[:, 3])[:, None]).any(axis=1)
 
     def _covered(self, candidates: np.ndarray, boxes: np.ndarray) -> np.ndarray:
         """Whether each candidate overlaps a track box enough to belong to it (``max_iou``, or mostly inside)."""

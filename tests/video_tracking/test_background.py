@@ -12,6 +12,9 @@ from plugins.video_tracking.background import BackgroundConfig, BackgroundModel
 from plugins.video_tracking.errors import TrackingError
 from plugins.video_tracking.scenes import crossing, render
 
+#: Pixel-exact checks need the mixtures at full size (the default shrinks frames twice).
+FULL = BackgroundConfig(downscale=1)
+
 GREEN = (40, 200, 40)
 
 
@@ -36,7 +39,7 @@ def test_people_in_view_in_every_warm_up_frame_are_foreground_in_the_first_frame
     first = scene.ground_truth[scene.ground_truth[:, 0] == 1]
     fractions = {}
     for median in (True, False):
-        model = BackgroundModel(BackgroundConfig(median_warm_up=median))
+        model = BackgroundModel(BackgroundConfig(median_warm_up=median, downscale=1))
         assert model.warm_up(spread) == 50
         mask = model.apply(scene.frames[0])
         fractions[median] = [mask[y - 1:y - 1 + h, x - 1:x - 1 + w].mean() for x, y, w, h in first[:, 2:6]]
@@ -56,7 +59,7 @@ def test_a_place_covered_in_most_warm_up_frames_by_people_in_two_colours_is_not_
         elif k % 20 < 11:
             frame[20:40, 30:50] = 45          # ... and another, in 11 of the 20 frames
         frames.append(frame)
-    model = BackgroundModel()
+    model = BackgroundModel(FULL)
     model.warm_up(frames)
     mask = model.apply(noisy(scene, rng))
     # The per-channel median is the second person's grey here; the colour most frames share is the background.
@@ -66,7 +69,7 @@ def test_a_place_covered_in_most_warm_up_frames_by_people_in_two_colours_is_not_
 def test_a_short_warm_up_learns_the_frames_as_they_are():
     rng = np.random.default_rng(2)
     scene = textured(rng)
-    model = BackgroundModel()
+    model = BackgroundModel(FULL)
     assert model.warm_up(noisy(scene, rng) for _ in range(3)) == 3
     assert model.frames_seen == 3
     assert model.warm_up([]) == 0
@@ -79,7 +82,7 @@ def test_a_short_warm_up_learns_the_frames_as_they_are():
 def test_grey_frames_work_throughout():
     rng = np.random.default_rng(3)
     scene = textured(rng)[:, :, 0]
-    model = BackgroundModel()
+    model = BackgroundModel(FULL)
     model.warm_up(noisy(scene, rng) for _ in range(20))
     frame = noisy(scene, rng, gain=1.2)
     frame[10:22, 10:22] = 250
@@ -96,7 +99,7 @@ def test_grey_frames_work_throughout():
 def test_a_person_who_stands_still_stays_foreground_only_when_protected(protected):
     rng = np.random.default_rng(4)
     scene = textured(rng)
-    model = BackgroundModel()
+    model = BackgroundModel(FULL)
     model.warm_up(noisy(scene, rng) for _ in range(30))
     square = square_mask(scene.shape, 30, 20, 14)
     protect = square_mask(scene.shape, 28, 18, 18) if protected else None
@@ -115,7 +118,7 @@ def test_a_person_who_stands_still_stays_foreground_only_when_protected(protecte
 def test_protected_background_pixels_stay_background_and_shadows_too():
     rng = np.random.default_rng(5)
     scene = textured(rng)
-    model = BackgroundModel()
+    model = BackgroundModel(FULL)
     model.warm_up(noisy(scene, rng) for _ in range(30))
     protect = np.zeros(scene.shape[:2], bool)
     protect[:, :40] = True
@@ -132,7 +135,7 @@ def test_protected_background_pixels_stay_background_and_shadows_too():
 
 
 def test_protect_must_be_a_bool_mask_of_the_frame_shape():
-    model = BackgroundModel()
+    model = BackgroundModel(FULL)
     frame = np.zeros((20, 30, 3), np.uint8)
     with pytest.raises(TrackingError, match=r"protect must be a bool array of shape \(20, 30\)"):
         model.apply(frame, protect=np.zeros((20, 30), np.uint8))
@@ -154,14 +157,14 @@ def test_a_global_brightening_never_reaches_the_mask_and_is_flagged_while_it_las
     rng = np.random.default_rng(6)
     scene = textured(rng)
     gains = [1.0] * 5 + list(np.linspace(1.0, 1.35, 11)[1:]) + [1.35] * 15
-    model = BackgroundModel()
+    model = BackgroundModel(FULL)
     model.warm_up(noisy(scene, rng) for _ in range(30))
     fractions, flags = gain_ramp(model, scene, rng, gains)
     assert fractions.max() < 0.01
     assert not flags[:5].any() and flags[7:15].all() and not flags[-3:].any()
     assert model.gain == pytest.approx(1.35, abs=0.01)
 
-    uncompensated = BackgroundModel(BackgroundConfig(compensate_gain=False))
+    uncompensated = BackgroundModel(BackgroundConfig(compensate_gain=False, downscale=1))
     uncompensated.warm_up(noisy(scene, rng) for _ in range(30))
     fractions, flags = gain_ramp(uncompensated, scene, rng, gains)
     # Without the gain the brightening floods the mask; the flood itself is flagged.
@@ -171,7 +174,7 @@ def test_a_global_brightening_never_reaches_the_mask_and_is_flagged_while_it_las
 def test_a_change_the_gain_cannot_explain_is_flagged_and_relearnt():
     rng = np.random.default_rng(7)
     before, after = textured(rng), textured(rng)
-    model = BackgroundModel()
+    model = BackgroundModel(FULL)
     model.warm_up(noisy(before, rng) for _ in range(30))
     fractions, flags = [], []
     for _ in range(20):
@@ -186,7 +189,7 @@ def test_a_change_the_gain_cannot_explain_is_flagged_and_relearnt():
 def test_a_large_person_does_not_bias_the_gain():
     rng = np.random.default_rng(8)
     scene = textured(rng)
-    model = BackgroundModel()
+    model = BackgroundModel(FULL)
     model.warm_up(noisy(scene, rng) for _ in range(30))
     frame = noisy(scene, rng)
     frame[5:55, 10:40] = 250                 # a third of the frame, far brighter
@@ -235,7 +238,7 @@ def test_bad_settings_are_refused(settings, message):
 
 
 def test_warm_up_frames_are_checked():
-    model = BackgroundModel()
+    model = BackgroundModel(FULL)
     with pytest.raises(TrackingError, match="uint8"):
         model.warm_up([np.zeros((20, 30, 3))] * 6)
     with pytest.raises(TrackingError, match="differs from the model's"):

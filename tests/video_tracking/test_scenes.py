@@ -442,7 +442,7 @@ def test_bad_configurations_are_rejected(make):
 
 def test_presets_are_registered_and_carry_their_seed():
     assert set(PRESETS) == {"crossing", "similar_colours", "partial_occlusion", "illumination", "scale_change", "demo",
-                            "entering_leaving"}
+                            "entering_leaving", "lost_and_found"}
     for name, make in PRESETS.items():
         config = make(5)
         assert config.seed == 5 and config.name == name
