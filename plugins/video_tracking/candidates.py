@@ -54,7 +54,7 @@ class BlobCandidates:
     """
 
     def __init__(self, config: InitiationConfig, image_shape: tuple[int, int], fit_every: int = 10,
-                 fit_until: int = 200) -> None:
+                 fit_until: int = 50) -> None:
         self.config = config
         self.image_shape = (int(image_shape[0]), int(image_shape[1]))
         self.min_area_pixels = config.min_area_pixels(self.image_shape)
