@@ -106,8 +106,6 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
         options["adaptive_particles"] = True
     if args.template_update:
         options["template_update"] = True
-    if args.detections is not None:
-        _add_detections_cue(options)
     automatic = args.init_from_gt is None
     if automatic and options.get("initiation") is not False:
         # Without an init file every track starts from the background model, which must know
@@ -118,20 +116,6 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
         options["initiation"] = table
         options.setdefault("warm_up", AUTOMATIC_WARM_UP)
     return options
-
-
-def _add_detections_cue(options: dict[str, Any]) -> None:
-    """Fuse the detections cue with the chosen cues, when the cue registry has one and it is not chosen yet."""
-    from plugins.video_tracking.config import TrackerConfig
-    from plugins.video_tracking.cues import CUES
-
-    if "detections" not in CUES:
-        return  # the tracker still receives the boxes; no cue turns them into masses yet
-    cues = options.get("cues", TrackerConfig().cues)
-    if isinstance(cues, str):
-        cues = (cues,)
-    if isinstance(cues, (list, tuple)) and "detections" not in cues:
-        options["cues"] = tuple(cues) + ("detections",)
 
 
 def _detections(args: argparse.Namespace, frame_count: int | None, width: int, height: int):
@@ -233,7 +217,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--detections", metavar="DET.txt",
                    help="a detector's boxes, MOTChallenge detection file: frame,-1,x,y,w,h,score,... per line "
                         "(1-based corner, score in [0, 1]); a MOTChallenge sequence has its public detections at "
-                        "SEQ/det/det.txt, which are used only when given here")
+                        "SEQ/det/det.txt, which are used only when given here. The boxes start, support and "
+                        "correct the tracks; add 'detections' to --cues to fuse them as a cue as well")
     p.add_argument("--gt", metavar="GT.txt", help="MOTChallenge ground truth to score the tracks against "
                                                   "(implied by --init-from-gt)")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")

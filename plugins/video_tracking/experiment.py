@@ -36,7 +36,7 @@ The configuration is a TOML file::
     name = "pets with detections"
     video = "pets09/video.avi"
     gt = "pets09/gt.txt"
-    detections = "pets09/det.txt"       # a MOTChallenge detection file; adds the "detections" cue
+    detections = "pets09/det.txt"       # a MOTChallenge detection file
     init = "automatic"
 
     [[methods]]
@@ -144,8 +144,9 @@ class SequenceSpec:
         Path of a MOTChallenge detection file (``det.txt``, absolute once loaded), read with
         :func:`~plugins.video_tracking.detections.read_detections` against the whole
         sequence's length and frame size (:meth:`load_detections`).  Every method that
-        tracks the sequence is given the boxes and fuses the ``"detections"`` cue after its
-        own cues, as ``belief track --detections`` does.  None: no detector.
+        tracks the sequence is given the boxes, as ``belief track --detections`` does: they
+        start, support and correct the tracks, and a method whose cues include
+        ``"detections"`` also fuses them as a cue.  None: no detector.
     """
 
     name: str
@@ -322,8 +323,6 @@ class Cell:
         if self.sequence.init == "automatic":
             settings.setdefault("initiation", {})
             settings.setdefault("warm_up", AUTOMATIC_WARM_UP)
-        if self.sequence.detections is not None:
-            settings["cues"] = _with_detections_cue(settings.get("cues"))
         return settings
 
     def config(self):
@@ -543,23 +542,6 @@ def _grid_methods(grid: Any) -> list[MethodSpec]:
                         parts.append("+".join(cues))
                 methods.append(MethodSpec.from_mapping("/".join(parts) or "default", options))
     return methods
-
-
-def _with_detections_cue(cues: Any) -> Any:
-    """The cues with ``"detections"`` appended when it is not among them (the rule of ``belief track``).
-
-    ``None`` stands for the default cues.  A value that is not a cue name or a list of them
-    is returned as it is, for :class:`TrackerConfig` to report.
-    """
-    from plugins.video_tracking.config import TrackerConfig
-
-    if cues is None:
-        cues = list(TrackerConfig().cues)
-    if isinstance(cues, str):
-        cues = [cues]
-    if isinstance(cues, (list, tuple)) and "detections" not in cues:
-        return list(cues) + ["detections"]
-    return cues
 
 
 def _cue_tuple(value: Any) -> tuple[str, ...]:

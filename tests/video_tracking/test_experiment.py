@@ -359,18 +359,18 @@ def test_a_sequence_with_detections_is_tracked_automatically_from_them(recorded_
     assert Path(sequence.detections) == (data / "det.txt").resolve()
     assert len(sequence.load_detections()) == 40
     cell = experiment.cells()[0]
-    assert cell.config().cues == ("colour", "location", "foreground", "detections")
+    assert cell.config().cues == ("colour", "location", "foreground")
     assert cell.config().initiation is not None and cell.config().warm_up == 50
     result = run_experiment(experiment, tmp_path / "out", workers=1, progress=False)
     row = result.results[0]
     assert row["frames"] == 20 and row["num_objects"] == 40
-    assert row["cues"] == "colour+location+foreground+detections"
+    assert row["cues"] == "colour+location+foreground"
     assert row["mota"] >= 0.9
     assert json.loads((tmp_path / "out" / "experiment.json").read_text())["sequences"][0]["detections"] \
         == sequence.detections
 
 
-def test_detections_add_their_cue_once_and_leave_other_sequences_keys_alone(tmp_path):
+def test_detections_leave_the_cues_and_other_sequences_keys_alone(tmp_path):
     det = write_gt_as_detections(tmp_path / "det.txt", np.array([[1, 1, 10, 10, 10, 20, 1, -1, -1, -1]]))
     experiment = experiment_from_mapping({
         "seeds": [0],
@@ -381,8 +381,7 @@ def test_detections_add_their_cue_once_and_leave_other_sequences_keys_alone(tmp_
     plain, with_boxes = experiment.cells()[:3], experiment.cells()[3:]
     assert [c.config().cues for c in plain] == [("colour",), ("detections", "colour"),
                                                 ("colour", "location", "foreground")]
-    assert [c.config().cues for c in with_boxes] == [("colour", "detections"), ("detections", "colour"),
-                                                     ("colour", "location", "foreground", "detections")]
+    assert [c.config().cues for c in with_boxes] == [c.config().cues for c in plain]
     assert with_boxes[0].sequence.detections == str(det.resolve())
     # The key of a cell without detections is the one it had before sequences could have them.
     assert "detections" not in plain[0].sequence.record()
