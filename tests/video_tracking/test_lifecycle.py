@@ -1,0 +1,183 @@
+"""Automatic tracks: candidate assignment, births, coasting, losses, re-identification, exits and duplicates."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from plugins.video_tracking import scenes
+from plugins.video_tracking.association import UNASSIGNED, assign
+from plugins.video_tracking.boxes import iou
+from plugins.video_tracking.config import TrackerConfig
+from plugins.video_tracking.cues import DetectionConfig, DetectionCue, Observation
+from plugins.video_tracking.errors import TrackingError
+from plugins.video_tracking.initiation import InitiationConfig
+from plugins.video_tracking.lifecycle import Lifecycle
+from plugins.video_tracking.tracker import Tracker
+
+NONE = np.zeros(0, dtype=np.intp)
+
+
+# -- assignment -------------------------------------------------------------------------------------
+def brute_force_best_total(tracks: np.ndarray, candidates: np.ndarray, gate: float) -> float:
+    """The largest total IoU of a one-to-one matching, by trying every injective map."""
+    overlap = iou(tracks, candidates)
+    best = 0.0
+    n, m = overlap.shape
+    for k in range(min(n, m) + 1):
+        for rows in itertools.combinations(range(n), k):
+            for cols in itertools.permutations(range(m), k):
+                values = overlap[list(rows), list(cols)]
+                if (values >= gate).all():
+                    best = max(best, float(values.sum()))
+    return best
+
+
+boxes = st.lists(st.tuples(st.integers(0, 60), st.integers(0, 60), st.integers(4, 30), st.integers(4, 30)),
+                 min_size=0, max_size=4)
+
+
+@settings(max_examples=60, deadline=None)
+@given(boxes, boxes, st.sampled_from([0.1, 0.3, 0.5]))
+def test_the_assignment_is_one_to_one_gated_and_of_the_largest_total_overlap(tracks, candidates, gate):
+    tracks = np.array(tracks, dtype=float).reshape(-1, 4)
+    candidates = np.array(candidates, dtype=float).reshape(-1, 4)
+    taken = assign(tracks, candidates, gate)
+    assert taken.shape == (len(tracks),)
+    chosen = taken[taken != UNASSIGNED]
+    assert len(set(chosen.tolist())) == len(chosen)                    # one-to-one
+    total = 0.0
+    for track, candidate in enumerate(taken):
+        if candidate != UNASSIGNED:
+            overlap = iou(tracks[track:track + 1], candidates[candidate:candidate + 1])[0, 0]
+            assert overlap >= gate
+            total += overlap
+    assert total == pytest.approx(brute_force_best_total(tracks, candidates, gate), abs=1e-9)
+
+
+def test_bad_assignment_inputs_are_refused():
+    with pytest.raises(TrackingError, match="min_iou"):
+        assign([[0, 0, 1, 1]], [[0, 0, 1, 1]], min_iou=0)
+    with pytest.raises(TrackingError, match="candidate boxes"):
+        assign([[0, 0, 1, 1]], [[0, 0, -1, 1]])
+    assert assign(np.zeros((0, 4)), [[0, 0, 1, 1, 0.5]]).shape == (0,)
+
+
+# -- the lifecycle ----------------------------------------------------------------------------------
+def lifecycle(**options) -> Lifecycle:
+    options.setdefault("first_frame", False)
+    return Lifecycle(InitiationConfig(**options), (100, 200))
+
+
+def test_a_chain_of_candidates_is_born_after_appear_frames_anywhere_in_the_image():
+    life = lifecycle(appear_frames=3)
+    births = [life.update([], np.zeros((0, 4)), NONE, np.array([[90.0 + k, 40, 10, 20, 0.9]])).births
+              for k in range(3)]
+    assert [len(b) for b in births] == [0, 0, 1] and births[2].tolist() == [[92.0, 40.0, 10.0, 20.0]]
+    border_only = lifecycle(appear_frames=1, anywhere=False)
+    middle = np.array([[90.0, 40, 10, 20, 0.9]])
+    assert len(border_only.update([], np.zeros((0, 4)), NONE, middle).births) == 0
+    assert len(lifecycle(appear_frames=1).update([], np.zeros((0, 4)), NONE, middle).births) == 1
+
+
+def test_every_free_candidate_of_the_first_frame_is_born_at_once_and_covered_ones_never():
+    life = lifecycle(first_frame=True)
+    candidates = np.array([[10.0, 10, 10, 20, 1], [100, 40, 10, 20, 1], [102, 42, 8, 16, 1]])
+    outcome = life.update([7], np.array([[100.0, 40, 10, 20]]), np.array([1]), candidates)
+    # The second is the track's own; the third lies inside the track's box.
+    assert outcome.births.tolist() == [[10.0, 10.0, 10.0, 20.0]]
+
+
+def test_an_unsupported_track_is_lost_after_lost_frames_and_a_track_at_the_border_ends():
+    life = lifecycle(lost_frames=3, exit_frames=2, appearance_support=None)
+    inside, border = np.array([[100.0, 40, 10, 20]]), np.array([[195.0, 40, 10, 20]])
+    assert [life.update([1], inside, np.array([-1]), np.zeros((0, 5))).lost for _ in range(3)] == [[], [], [1]]
+    assert [life.update([2], border, np.array([-1]), np.zeros((0, 5))).ended for _ in range(2)] == [[], [2]]
+    # A candidate every other frame keeps a track alive.
+    life = lifecycle(lost_frames=2, appearance_support=None)
+    outcomes = [life.update([3], inside, np.array([k % 2 - 1]), np.array([[100.0, 40, 10, 20, 1]]))
+                for k in range(8)]
+    assert not any(o.lost for o in outcomes)
+
+
+def test_foreground_supports_a_track_only_where_no_other_track_took_a_candidate():
+    mask = np.zeros((100, 200), bool)
+    mask[40:60, 100:110] = True
+    life = lifecycle(lost_frames=2, appearance_support=None)
+    followed = np.array([[100.0, 40, 10, 20], [101, 41, 8, 18], [100, 40, 10, 20]])
+    lost = [life.update([1, 2], followed[:2], np.array([0, -1]), np.array([[100.0, 40, 10, 20, 1]]),
+                        foreground=mask).lost for _ in range(2)]
+    assert lost == [[], [2]]                   # track 2 sits on the person track 1 follows
+    alone = lifecycle(lost_frames=2, appearance_support=None)
+    assert [alone.update([5], followed[2:], np.array([-1]), np.zeros((0, 5)), foreground=mask).lost
+            for _ in range(3)] == [[], [], []]
+
+
+def test_a_track_mostly_inside_an_older_one_ends_as_its_duplicate():
+    life = lifecycle(duplicate_frames=3, appearance_support=None)
+    pair = np.array([[100.0, 40, 20, 40], [104, 50, 10, 20]])                  # IoU 0.25, all inside
+    ended = [life.update([1, 2], pair, np.array([0, 1]), np.array([[100.0, 40, 20, 40, 1], [104, 50, 10, 20, 1]]))
+             .ended for _ in range(3)]
+    assert ended == [[], [], [2]]
+
+
+def test_no_chain_grows_while_births_are_not_allowed():
+    life = lifecycle(appear_frames=2)
+    candidate = np.array([[90.0, 40, 10, 20, 1]])
+    life.update([], np.zeros((0, 4)), NONE, candidate)
+    assert len(life.update([], np.zeros((0, 4)), NONE, candidate, births_allowed=False).births) == 0
+    assert life.chains == []
+    assert len(life.update([], np.zeros((0, 4)), NONE, candidate).births) == 0
+
+
+# -- the detections cue -----------------------------------------------------------------------------
+def observation(detections, assigned, centres=((50.0, 50.0), (10.0, 10.0))):
+    return Observation(np.zeros((100, 100, 3), np.uint8), None, centres=list(centres),
+                       sizes=[[20, 40]] * len(centres), previous_particles=np.zeros((0, 2)),
+                       detections=detections, assigned=assigned)
+
+
+def test_the_detections_cue_discounts_each_detection_by_its_score():
+    cue = DetectionCue(DetectionConfig(sigma=0.25))
+    states = np.array([[50.0, 50, 0, 0, 0], [55.0, 50, 0, 0, 0], [90, 90, 0, 0, 0]])
+    scores = np.exp(cue.log_likelihoods(observation([[40, 30, 20, 40, 0.6]], [0, -1]), states, np.zeros(3, int)))
+    gaussian = np.exp(-0.5 * (5 / (0.25 * 20)) ** 2)
+    assert scores[:, 0] == pytest.approx([1.0, 0.6 * gaussian + 0.4, 0.4], abs=1e-6)
+    assert (scores[:, 1] == 1.0).all()                                          # no detection: no say
+    assert scores[:, 2] == pytest.approx([0.4, 1 - 0.6 * gaussian, 1.0], abs=1e-6)
+    nothing = cue.log_likelihoods(observation(np.zeros((0, 5)), [-1, -1]), states, np.zeros(3, int))
+    assert (nothing == 0).all()
+
+
+def test_the_detections_cue_refuses_inconsistent_assignments():
+    with pytest.raises(TrackingError, match="assigned"):
+        observation([[40, 30, 20, 40, 0.6]], [1, -1])
+    with pytest.raises(TrackingError, match="detections"):
+        observation([[40, 30, -20, 40, 0.6]], [0, -1])
+
+
+# -- end to end -------------------------------------------------------------------------------------
+def test_a_person_lost_behind_a_wall_takes_back_their_id_when_they_come_out():
+    scene = scenes.render(scenes.lost_and_found(0))
+    config = TrackerConfig.from_settings({"initiation": {}, "warm_up": 50, "particles": 50})
+    tracker = Tracker(config, None, np.random.default_rng(0))
+    picks = np.linspace(0, len(scene) - 1, 50).round().astype(int)
+    tracker.warm_up(scene.frames[k] for k in picks)
+    gt, visible = scene.ground_truth, scene.visibility
+    ids_on_walker, lost_ever = [], set()
+    for result in tracker.track(scene.frames):
+        lost_ever |= set(tracker.tracks.lost)
+        row = (gt[:, 0] == result.frame) & (gt[:, 1] == 1) & (visible == 1)
+        if not row.any() or not result.estimates:
+            continue
+        truth = gt[row][0, 2:6] - [1, 1, 0, 0]
+        overlaps = iou(np.array([e.box for e in result.estimates]), truth[None])[:, 0]
+        if overlaps.max() >= 0.5:
+            ids_on_walker.append(result.estimates[int(np.argmax(overlaps))].id)
+    # Seen before and after the wall, under one id, although the track was lost in between.
+    assert len(ids_on_walker) > 100 and set(ids_on_walker) == {ids_on_walker[0]}
+    assert ids_on_walker[0] in lost_ever
