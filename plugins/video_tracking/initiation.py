@@ -1,31 +1,23 @@
-"""When tracks start and end: init plans, and automatic initiation from a foreground mask (SPEC B.4).
+"""When tracks start and end: init plans, the settings of automatic tracks, and foreground blobs (SPEC B.4).
 
 An :class:`InitPlan` says when each target is born and removed: from a MOTChallenge ground
 truth (:func:`init_from_gt`, as ``belief track --init-from-gt``), from a file of first-frame
 boxes (:func:`read_init_boxes`) or from boxes in code (:func:`init_from_boxes`).
 
-Without a plan, or for the people who enter later, the tracks start and end on their own
-(L §1.2 modules 2, 3 and 5).
+Without a plan, or for the people who enter later, the tracks start, are lost, are found
+again and end on their own (L §1.2 modules 2, 3 and 5), by the rules of
+:class:`InitiationConfig` that :class:`~plugins.video_tracking.lifecycle.Lifecycle` applies
+to each frame's candidate boxes: a detector's, or the person blobs of the foreground mask.
+L starts a target for every foreground blob of the first frame (module 2) and watches the
+image border for people who come in or go out (modules 3 and 5); people also appear from
+behind things and stop being seen in the middle of the image, so by default new tracks
+may start anywhere (``anywhere``), and a track that nothing supports is hidden, then lost
+and remembered.
 
-L's multi-target tracker starts a target for every foreground blob of the first frame
-(module 2), watches the image border for people who come in or go out (module 3) and
-adds or removes targets accordingly (module 5).  L gives no rules for modules 3 and 5,
-so the SPEC defaults are used:
-
-* **blobs**: the foreground mask is cleaned by a morphological opening with a square
-  kernel (3 × 3 by default) and split into 8-connected components; components smaller
-  than ``min_area · W · H`` pixels are dropped (:func:`foreground_blobs`);
-* **appear**: a blob that meets the border zone (``border`` px wide along the four image
-  edges) and belongs to no track for ``appear_frames`` consecutive frames becomes a new
-  track, whose box is the blob's bounding box at that frame;
-* **disappear**: a track whose box centre lies in the border zone or outside the image,
-  and whose box holds a foreground fraction below ``exit_foreground``, for ``exit_frames``
-  consecutive frames is ended.  A track whose box holds too little foreground for
-  ``lost_frames`` consecutive frames is ended wherever it is (the target has stopped
-  being seen, for example because the filter drifted onto the background).
-
-:class:`Initiator` holds the counters from frame to frame; the tracker calls
-:meth:`Initiator.update` once per frame with the mask and its current track boxes.
+The blobs of a mask are its 8-connected components after a morphological opening with a
+square kernel (3 × 3 by default), dropping those smaller than ``min_area · W · H`` pixels
+(:func:`foreground_blobs`); :func:`foreground_fraction` measures how much of a box is
+foreground.
 
 Boxes are ``(x, y, w, h)`` in 0-based pixels, with ``(x, y)`` the top-left corner, as in
 :mod:`plugins.video_tracking.cues`: pixel (column i, row j) covers [i, i+1) × [j, j+1), and
@@ -44,7 +36,7 @@ import numpy as np
 
 from belief.textfiles import read_text
 from plugins.video_tracking import checks
-from plugins.video_tracking.boxes import box_centres, check_boxes, intersections, iou
+from plugins.video_tracking.boxes import check_boxes
 from plugins.video_tracking.errors import InitError, TrackingError
 from plugins.video_tracking.motfiles import read_mot
 
@@ -55,22 +47,16 @@ __all__ = [
     "init_from_boxes",
     "read_init_boxes",
     "InitiationConfig",
-    "Initiator",
     "foreground_blobs",
     "foreground_fraction",
     "COVERED_FRACTION",
-    "CANDIDATE_IOU",
 ]
 
 Box = tuple[float, float, float, float]
 
-#: A blob is a track's when at least this fraction of the blob's area lies inside the
-#: track box, whatever their IoU (a track box may be much larger or smaller than the blob).
+#: A candidate is a track's when at least this fraction of its area lies inside the track
+#: box, whatever their IoU (a track box may be much larger or smaller than the candidate).
 COVERED_FRACTION = 0.5
-
-#: A blob continues an appearance candidate of the previous frame when their IoU is at
-#: least this (or when their centres are at most half the blob's diagonal apart).
-CANDIDATE_IOU = 0.3
 
 
 # -- init plans ------------------------------------------------------------------------------------
@@ -527,222 +513,3 @@ def foreground_fraction(mask: np.ndarray, boxes) -> np.ndarray:
     foreground = integral[y1, x1] - integral[y0, x1] - integral[y1, x0] + integral[y0, x0]
     pixels = (x1 - x0) * (y1 - y0)
     return np.divide(foreground, pixels, out=np.zeros(len(boxes)), where=pixels > 0)
-
-
-# -- the stateful initiator -----------------------------------------------------------------------
-class Initiator:
-    """Births and deaths of tracks, frame after frame, from the foreground mask (SPEC B.4).
-
-    Parameters
-    ----------
-    config : InitiationConfig or None
-        The rules; None means the defaults.
-    image_shape : (int, int) or (int, int, int)
-        (H, W) of the frames, or a frame's full shape (H, W, C).
-
-    Notes
-    -----
-    Each call to :meth:`update` takes the mask of one frame and the current track boxes:
-
-    1. The blobs of the mask are taken (:func:`foreground_blobs`).  A blob is *covered*
-       when its IoU with a track box is at least ``max_iou``, or when at least
-       :data:`COVERED_FRACTION` of its area lies in a track box.
-    2. On the first call with ``first_frame=True``, every uncovered blob is born at once.
-    3. Otherwise the uncovered blobs that meet the border zone are the candidates of this
-       frame.  Each one continues the best-matching candidate of the previous frame (IoU
-       at least :data:`CANDIDATE_IOU`, or centres at most half the blob's diagonal apart;
-       pairs are taken greedily by decreasing IoU, then increasing distance) and takes its
-       count plus one, or starts at 1.  A candidate whose count reaches ``appear_frames``
-       is born with the blob's current box; the previous candidates that no blob continues
-       are dropped.
-    4. Each track keeps two counters, reset when its condition fails: frames with its box
-       centre in the border zone (or outside the image) *and* foreground fraction below
-       ``exit_foreground``, and frames with the fraction below ``exit_foreground``
-       anywhere.  A track dies when the first reaches ``exit_frames`` or the second
-       reaches ``lost_frames``.  The counters of ids that are no longer given are dropped.
-
-    The border zone is the ``border`` outermost pixel columns and rows: a point (px, py)
-    is in it when ``px < b``, ``px >= W - b``, ``py < b`` or ``py >= H - b``.
-
-    Examples
-    --------
-    A person walks in at the left edge of an empty 40 × 60 image and is born at the third
-    consecutive frame in which they are seen:
-
-    >>> init = Initiator(InitiationConfig(border=5, min_area=0.01), (40, 60))
-    >>> mask = np.zeros((40, 60), bool)
-    >>> init.update(mask, {})  # nothing on the first frame
-    ([], [])
-    >>> for right in (3, 5, 7):
-    ...     mask[10:30, :right] = True
-    ...     print(init.update(mask, {}))
-    ([], [])
-    ([], [])
-    ([(0.0, 10.0, 7.0, 20.0)], [])
-
-    The tracker now follows the person as track 1.  They walk out again, and the track
-    ends once its box, in the border zone, has held no foreground for three frames:
-
-    >>> mask[:] = False
-    >>> [init.update(mask, {1: (-2.0, 10.0, 6.0, 20.0)}) for _ in range(3)]
-    [([], []), ([], []), ([], [1])]
-    """
-
-    def __init__(self, config: InitiationConfig | None, image_shape: tuple[int, ...]) -> None:
-        if config is None:
-            config = InitiationConfig()
-        if not isinstance(config, InitiationConfig):
-            raise TrackingError(f"config must be an InitiationConfig, got {type(config).__name__}")
-        self.config = config
-        self.image_shape = _image_shape(image_shape)
-        self.min_area_pixels = config.min_area_pixels(self.image_shape)
-        self._frames_seen = 0
-        self._candidates = np.zeros((0, 4))
-        self._candidate_counts = np.zeros(0, dtype=np.intp)
-        self._blobs = np.zeros((0, 4))
-        self._exit_counts: dict[int, int] = {}
-        self._lost_counts: dict[int, int] = {}
-        self._twin_counts: dict[int, int] = {}
-
-    @property
-    def frames_seen(self) -> int:
-        """How many frames :meth:`update` has been given."""
-        return self._frames_seen
-
-    @property
-    def candidates(self) -> list[tuple[Box, int]]:
-        """The appearance candidates after the last frame: ``(blob box, consecutive frames seen)``."""
-        return [(tuple(float(v) for v in box), int(n)) for box, n in zip(self._candidates, self._candidate_counts)]
-
-    @property
-    def blobs(self) -> np.ndarray:
-        """The foreground blobs of the last frame given to :meth:`update`, shape (n, 4) (a copy)."""
-        return self._blobs.copy()
-
-    def touches_border(self, boxes) -> np.ndarray:
-        """Whether each box ``(x, y, w, h)`` reaches into the border zone, shape (n,)."""
-        return self._in_border_zone(np.asarray(boxes, dtype=np.float64).reshape(-1, 4))
-
-    def reset(self) -> None:
-        """Forget every candidate and counter, as if no frame had been given."""
-        self._frames_seen = 0
-        self._candidates = np.zeros((0, 4))
-        self._candidate_counts = np.zeros(0, dtype=np.intp)
-        self._blobs = np.zeros((0, 4))
-        self._exit_counts.clear()
-        self._twin_counts.clear()
-        self._lost_counts.clear()
-
-    def update(self, mask: np.ndarray, tracks: dict[int, Box]) -> tuple[list[Box], list[int]]:
-        """Process one frame.
-
-        Parameters
-        ----------
-        mask : ndarray of bool, shape (H, W)
-            The frame's foreground mask.
-        tracks : dict of int to (x, y, w, h)
-            The current box of every live track, by track id.
-
-        Returns
-        -------
-        births : list of (float, float, float, float)
-            Boxes of the new tracks (the blobs' bounding boxes), sorted by x then y.
-        deaths : list of int
-            Ids of the tracks to end, in increasing order.
-
-        Raises
-        ------
-        TrackingError
-            If the mask is not a bool array of the image shape, or a track box is not four
-            finite numbers with a positive width and height.
-        """
-        mask = _checked_mask(mask, self.image_shape)
-        ids, boxes = self._checked_tracks(tracks)
-        first = self._frames_seen == 0
-        self._frames_seen += 1
-
-        blobs = foreground_blobs(mask, self.min_area_pixels, self.config.opening)
-        self._blobs = blobs
-        free = ~self._covered(blobs, boxes)
-        if first and self.config.first_frame:
-            births = blobs[free]
-            self._candidates = np.zeros((0, 4))
-            self._candidate_counts = np.zeros(0, dtype=np.intp)
-        else:
-            births = self._advance_candidates(blobs[free & self._in_border_zone(blobs)])
-        deaths = self._deaths(mask, ids, boxes)
-        return [tuple(float(v) for v in box) for box in births], deaths
-
-    # -- steps of update --------------------------------------------------------------------------
-    @staticmethod
-    def _checked_tracks(tracks) -> tuple[list[int], np.ndarray]:
-        if not isinstance(tracks, dict):
-            raise TrackingError(f"tracks must be a dict {{id: (x, y, w, h)}}, got {type(tracks).__name__}")
-        ids = sorted(checks.integer("a track id", track_id) for track_id in tracks)
-        boxes = check_boxes([tracks[track_id] for track_id in ids], "track boxes").reshape(-1, 4)
-        return ids, boxes
-
-    def _covered(self, blobs: np.ndarray, boxes: np.ndarray) -> np.ndarray:
-        """Whether each blob belongs to a track (IoU >= max_iou, or mostly inside a track box)."""
-        if len(boxes) == 0 or len(blobs) == 0:
-            return np.zeros(len(blobs), dtype=bool)
-        overlap = iou(blobs, boxes) >= self.config.max_iou
-        inside = intersections(blobs, boxes) >= COVERED_FRACTION * (blobs[:, 2] * blobs[:, 3])[:, None]
-        return (overlap | inside).any(axis=1)
-
-    def _in_border_zone(self, blobs: np.ndarray) -> np.ndarray:
-        """Whether any pixel of each blob lies within ``border`` px of an image edge."""
-        height, width = self.image_shape
-        b = self.config.border
-        return ((blobs[:, 0] < b) | (blobs[:, 1] < b)
-                | (blobs[:, 0] + blobs[:, 2] > width - b) | (blobs[:, 1] + blobs[:, 3] > height - b))
-
-    def _advance_candidates(self, blobs: np.ndarray) -> np.ndarray:
-        """Match this frame's candidate blobs to the previous ones; return those that are born."""
-        counts = np.ones(len(blobs), dtype=np.intp)
-        previous, previous_counts = self._candidates, self._candidate_counts
-        if len(blobs) and len(previous):
-            overlaps = iou(blobs, previous)
-            centres = box_centres(blobs)
-            previous_centres = box_centres(previous)
-            distances = np.linalg.norm(centres[:, None, :] - previous_centres[None, :, :], axis=2)
-            reach = np.hypot(blobs[:, 2], blobs[:, 3])[:, None] / 2
-            rows, cols = np.nonzero((overlaps >= CANDIDATE_IOU) | (distances <= reach))
-            order = np.lexsort((cols, rows, distances[rows, cols], -overlaps[rows, cols]))
-            blob_taken = np.zeros(len(blobs), dtype=bool)
-            previous_taken = np.zeros(len(previous), dtype=bool)
-            for k in order:
-                i, j = rows[k], cols[k]
-                if not blob_taken[i] and not previous_taken[j]:
-                    blob_taken[i] = previous_taken[j] = True
-                    counts[i] = previous_counts[j] + 1
-        born = counts >= self.config.appear_frames
-        self._candidates = blobs[~born]
-        self._candidate_counts = counts[~born]
-        return blobs[born]
-
-    def _deaths(self, mask: np.ndarray, ids: list[int], boxes: np.ndarray) -> list[int]:
-        """Update the per-track counters; return the ids of the tracks that end."""
-        config = self.config
-        height, width = self.image_shape
-        b = config.border
-        empty = foreground_fraction(mask, boxes) < config.exit_foreground
-        centre_x = boxes[:, 0] + boxes[:, 2] / 2
-        centre_y = boxes[:, 1] + boxes[:, 3] / 2
-        at_border = (centre_x < b) | (centre_x >= width - b) | (centre_y < b) | (centre_y >= height - b)
-        # ids are sorted, so an older track (smaller id) comes first: a duplicate is a track
-        # that overlaps an older one.
-        overlaps = iou(boxes, boxes) if len(ids) else np.zeros((0, 0))
-        duplicate = np.array([(overlaps[k, :k] >= config.duplicate_iou).any() for k in range(len(ids))], dtype=bool)
-        exit_counts, lost_counts, twin_counts, deaths = {}, {}, {}, []
-        for k, track_id in enumerate(ids):
-            leaving = self._exit_counts.get(track_id, 0) + 1 if empty[k] and at_border[k] else 0
-            lost = self._lost_counts.get(track_id, 0) + 1 if empty[k] else 0
-            twin = self._twin_counts.get(track_id, 0) + 1 if duplicate[k] else 0
-            if leaving >= config.exit_frames or (config.lost_frames is not None and lost >= config.lost_frames) \
-                    or (config.duplicate_frames is not None and twin >= config.duplicate_frames):
-                deaths.append(track_id)
-            else:
-                exit_counts[track_id], lost_counts[track_id], twin_counts[track_id] = leaving, lost, twin
-        self._exit_counts, self._lost_counts, self._twin_counts = exit_counts, lost_counts, twin_counts
-        return deaths
