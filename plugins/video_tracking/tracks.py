@@ -1,14 +1,16 @@
-"""The live targets: births and deaths from the init plan and the automatic initiation.
+"""The live targets: births, corrections, losses, re-identification and deaths.
 
 :class:`TrackManager` holds the targets in birth order, which is also the order of the
 appearance cues' templates: a birth appends a template to every appearance cue and a death
 removes it.  Births come from the :class:`~plugins.video_tracking.initiation.InitPlan`
-(by hand or from a ground truth) and, with the automatic initiation, from foreground blobs
-entering the image (SPEC B.4); deaths from the plan's last frames and from the
-initiation's exit, lost and duplicate rules.  A target born in part at the image border
-(*growing*) takes the size and centre of its blob until the blob is all in view, and then
-its templates are taken anew.  The boxes of planned births fit the perspective model of
-the window sizes (:class:`~plugins.video_tracking.perspective.PerspectiveScale`).
+(by hand or from a ground truth) and, without a plan or for the people who enter later,
+from the frame's candidate boxes, by the rules of
+:class:`~plugins.video_tracking.lifecycle.Lifecycle`: a target that took a candidate moves
+its box towards it (:meth:`TrackManager.follow_candidates`); one that nothing supports is
+hidden, then lost, and its templates are remembered so that a newborn target that looks
+like it, near where it should be, takes back its id.  The boxes of planned births fit the
+perspective model of the window sizes
+(:class:`~plugins.video_tracking.perspective.PerspectiveScale`).
 
 Every random draw (the particles of a newborn target, W-S1) comes from the generator given
 to the manager.
@@ -217,16 +219,19 @@ class TrackManager:
         assigned : ndarray of int, shape (τ,), optional
             The candidate each live target took (−1: none).
         detector : bool
-            Whether the candidates come from a detector (else a track box with enough
-            foreground counts as supported).
+            Whether the candidates come from a detector.
         births_allowed : bool
             False when this frame's candidates must not start tracks (a lighting change).
         likeness : ndarray, shape (τ,), optional
             How much each target's window still looks like its templates (Bhattacharyya
             coefficient): at least ``appearance_support`` supports the target.
 
-        The estimates of tracks that end or are lost here are dropped; those of newborn
-        targets are appended (their birth boxes).
+        Returns
+        -------
+        list of Estimate
+            The frame's output: the estimates of the tracks that end, are lost or coast
+            unseen for longer than ``coast_frames`` are left out; those of newborn targets
+            are appended (their birth boxes).
         """
         self._frame = frame
         # The lifecycle reads the targets that went through this frame's filter; planned
