@@ -341,7 +341,7 @@ class InitiationConfig:
     memory: int = 50
     reid_similarity: float = 0.85
     size_smoothing: float = 0.3
-    max_aspect: float = 1.0
+    max_aspect: float = 0.5
     centre_gain: float = 0.5
 
     def __post_init__(self) -> None:

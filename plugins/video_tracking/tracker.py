@@ -310,7 +310,7 @@ class Tracker:
             records = self._diagnose(obs, evidence, weighing, weighted)
             self._resample(weighted, records)
             if assigned is not None:
-                self.tracks.follow_candidates(assigned, candidates)
+                self.tracks.follow_candidates(assigned, candidates, detector)
             if self.tracks.lifecycle is not None:
                 likeness = self._likeness(obs)
             estimates = [Estimate(frame, t.id, t.estimate.copy(), t.box()) for t in self.targets]

@@ -267,11 +267,14 @@ class TrackManager:
             estimates.append(self._reidentify(estimate, frame))
         return estimates
 
-    def follow_candidates(self, assigned: np.ndarray, candidates: np.ndarray) -> None:
+    def follow_candidates(self, assigned: np.ndarray, candidates: np.ndarray, detector: bool = False) -> None:
         """Targets that took a candidate move towards it: size by ``size_smoothing``, centre by ``centre_gain``.
 
         The centre moves by the gain times the candidate's score, particles and estimate
-        alike, so that the next frame starts from the corrected position.
+        alike, so that the next frame starts from the corrected position.  A ``detector``'s
+        box keeps a margin of background beside the person (detectors often give one
+        aspect ratio to everybody): it gives at most ``max_aspect`` times its height as the
+        width.  A foreground blob is the silhouette itself and gives its width as it is.
         """
         initiation = self.config.initiation
         if initiation is None:
@@ -282,9 +285,7 @@ class TrackManager:
                 continue
             x, y, w, h, score = candidates[k]
             self._last_seen[target.id] = (self._frame, np.array([x, y, w, h]))
-            # A standing person is rarely wider than ``max_aspect`` of their height; a wider
-            # candidate box holds background (or part of a neighbour) beside them.
-            width = min(w, initiation.max_aspect * h)
+            width = min(w, initiation.max_aspect * h) if detector else w
             target.size = (1.0 - rate) * target.size + rate * np.array([width, h])
             if gain > 0:
                 shift = np.zeros(target.particles.states.shape[1])
