@@ -46,7 +46,8 @@ CANDIDATES: dict[str, tuple[dict, str]] = {
     "dsmc": ({"rule": "dsmc"}, "DSmC instead of the R-weighted rule"),
     "product": ({"fusion": "product"}, "product of the cues' likelihoods instead of a belief rule"),
     "detections cue": ({"cues": ["colour", "location", "foreground", "detections"]},
-                       "the detections fused as a fourth cue (changes only the runs with detections)"),
+                       "the candidates fused as a fourth cue: the detections, the person blobs without them, "
+                       "and nothing (every hypothesis alike) when born from the ground truth"),
     "full-size mask": ({"background": {"downscale": 1}}, "the background model at full resolution"),
     "duplicates 15": ({"initiation": {"duplicate_frames": 15}}, "duplicates end after 15 frames instead of 5"),
     "border births": ({"initiation": {"anywhere": False}}, "new tracks only at the image border (SPEC B.4)"),
@@ -82,7 +83,9 @@ def run(job: tuple) -> tuple:
         frames, gt, boxes = _pets(Path(data))
         how = task.split(" ", 1)[1]
         if how == "gt":
+            # As --init-from-gt: every birth and death from the ground truth, no automatic tracks.
             plan = init_from_gt(gt)
+            settings.pop("initiation", None)
         detections = boxes if how == "detections" else None
     else:
         scene = scenes.render(scenes.PRESETS[task](seed))
