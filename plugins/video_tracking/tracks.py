@@ -270,6 +270,10 @@ class TrackManager:
     def follow_candidates(self, assigned: np.ndarray, candidates: np.ndarray, detector: bool = False) -> None:
         """Targets that took a candidate move towards it: size by ``size_smoothing``, centre by ``centre_gain``.
 
+        A detection moves the size by ``detection_size_smoothing`` instead: a detector's boxes
+        jitter from frame to frame more than a silhouette's, so they are averaged over more
+        frames.
+
         The centre moves by the gain times the candidate's score, particles and estimate
         alike, so that the next frame starts from the corrected position.  A ``detector``'s
         box keeps a margin of background beside the person (detectors often give one
@@ -286,7 +290,8 @@ class TrackManager:
             x, y, w, h, score = candidates[k]
             self._last_seen[target.id] = (self._frame, np.array([x, y, w, h]))
             width = min(w, initiation.max_aspect * h) if detector else w
-            target.size = (1.0 - rate) * target.size + rate * np.array([width, h])
+            step = initiation.detection_size_smoothing if detector else rate
+            target.size = (1.0 - step) * target.size + step * np.array([width, h])
             if gain > 0:
                 shift = np.zeros(target.particles.states.shape[1])
                 shift[[CX, CY]] = gain * score * (np.array([x + w / 2.0, y + h / 2.0]) - target.estimate[[CX, CY]])
