@@ -2,11 +2,13 @@
 
 A frame's *candidates* are the boxes a detector gives (or, without a detector, the person
 blobs of the foreground mask).  Each track may take at most one candidate and each
-candidate may go to at most one track; among all such matchings :func:`assign` takes the
-one with the largest total overlap (IoU), found as a linear assignment on the cost 1 − IoU
-(the Hungarian method, SciPy's ``linear_sum_assignment``).  Pairs that overlap less than a
-gate are never matched: a track with no candidate above its gate is *unsupported* this
-frame, and a candidate that no track takes may start a new one.
+candidate may go to at most one track, and pairs that overlap less than a gate are never
+matched.  Among all such matchings :func:`assign` takes the one that maximises the number
+of pairs plus their total overlap, k + Σ IoU: a linear assignment on the cost 1 − IoU (the
+Hungarian method, SciPy's ``linear_sum_assignment``), as in SORT.  One more pair above the
+gate is worth more than any gain of overlap, so as many tracks as can be are supported.  A
+track with no candidate is *unsupported* this frame, and a candidate that no track takes
+may start a new one.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ UNASSIGNED = -1
 
 
 def assign(tracks, candidates, min_iou: float = 0.3) -> np.ndarray:
-    """The candidate of each track under the largest-total-IoU one-to-one matching.
+    """The candidate of each track under the one-to-one matching of largest k + Σ IoU.
 
     Parameters
     ----------
@@ -46,9 +48,8 @@ def assign(tracks, candidates, min_iou: float = 0.3) -> np.ndarray:
 
     Examples
     --------
-    Two tracks and three candidates: the matching that maximises the total overlap gives
-    track 0 the second candidate, although the first overlaps it a little too; the third
-    candidate is free.
+    Two tracks and three candidates: track 0 takes the second candidate, which it overlaps
+    most; the first overlaps track 1 too little for the gate of 0.3, and the third is free.
 
     >>> tracks = [[0, 0, 10, 20], [30, 0, 10, 20]]
     >>> candidates = [[6, 0, 10, 20], [1, 0, 10, 20], [100, 0, 10, 20]]
