@@ -38,7 +38,8 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from plugins.video_tracking.boxes import check_boxes
+from plugins.video_tracking.boxes import check_boxes, pixel_ranges
+from plugins.video_tracking import checks
 from plugins.video_tracking.errors import TrackingError
 from plugins.video_tracking.perspective import PersonSize
 
@@ -172,14 +173,10 @@ def box_mask(image_shape: tuple[int, ...], boxes) -> np.ndarray:
            [0, 1, 1, 0, 0, 0],
            [0, 0, 0, 0, 0, 1]])
     """
-    height, width = _image_size(image_shape)
+    height, width = checks.image_shape(image_shape)
     boxes = check_boxes(boxes, "boxes", positive=False).reshape(-1, 4)
     mask = np.zeros((height, width), dtype=bool)
-    # Pixel i is in [x, x + w) when its centre i + 1/2 is: i from ceil(x - 1/2) to ceil(x + w - 1/2) - 1.
-    x0 = np.clip(np.ceil(boxes[:, 0] - 0.5), 0, width).astype(np.intp)
-    x1 = np.clip(np.ceil(boxes[:, 0] + boxes[:, 2] - 0.5), 0, width).astype(np.intp)
-    y0 = np.clip(np.ceil(boxes[:, 1] - 0.5), 0, height).astype(np.intp)
-    y1 = np.clip(np.ceil(boxes[:, 1] + boxes[:, 3] - 0.5), 0, height).astype(np.intp)
+    x0, x1, y0, y1 = pixel_ranges(boxes, (height, width))
     for a, b, c, d in zip(y0, y1, x0, x1):
         mask[a:b, c:d] = True
     return mask
@@ -437,13 +434,3 @@ def _number(name: str, value, *, minimum: float | None = None, above: float | No
         raise TrackingError(f"{name} must be a finite number {bound}, got {value!r}")
     return float(value)
 
-
-def _image_size(shape) -> tuple[int, int]:
-    try:
-        dims = tuple(shape)
-    except TypeError:
-        dims = ()
-    if len(dims) not in (2, 3) or any(isinstance(d, bool) or not isinstance(d, (int, np.integer)) or d < 1
-                                       for d in dims[:2]):
-        raise TrackingError(f"image_shape must be (H, W) or (H, W, C) with positive H and W, got {shape!r}")
-    return int(dims[0]), int(dims[1])

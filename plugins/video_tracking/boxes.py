@@ -15,7 +15,7 @@ import numpy as np
 
 from plugins.video_tracking.errors import TrackingError
 
-__all__ = ["check_boxes", "iou", "intersections", "box_centres"]
+__all__ = ["check_boxes", "iou", "intersections", "box_centres", "pixel_ranges"]
 
 
 def check_boxes(boxes, what: str = "boxes", *, positive: bool = True, image_shape: tuple[int, int] | None = None,
@@ -138,3 +138,22 @@ def box_centres(boxes) -> np.ndarray:
     """
     boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
     return boxes[:, :2] + boxes[:, 2:] / 2.0
+
+
+def pixel_ranges(boxes: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray, ...]:
+    """First and one-past-last pixel columns and rows of each box, clipped to the image of ``shape`` (H, W).
+
+    Pixel (i, j) is in a box when its centre (i + 1/2, j + 1/2) is.
+
+    Examples
+    --------
+    >>> [r.tolist() for r in pixel_ranges(np.array([[1.0, 1.0, 2.0, 2.0], [5.0, 3.0, 4.0, 4.0]]), (4, 6))]
+    [[1, 5], [3, 6], [1, 3], [3, 4]]
+    """
+    height, width = shape
+    # Pixel i is in [x, x + w) when its centre i + 1/2 is: i from ceil(x - 1/2) to ceil(x + w - 1/2) - 1.
+    x0 = np.clip(np.ceil(boxes[:, 0] - 0.5), 0, width).astype(np.intp)
+    x1 = np.clip(np.ceil(boxes[:, 0] + boxes[:, 2] - 0.5), 0, width).astype(np.intp)
+    y0 = np.clip(np.ceil(boxes[:, 1] - 0.5), 0, height).astype(np.intp)
+    y1 = np.clip(np.ceil(boxes[:, 1] + boxes[:, 3] - 0.5), 0, height).astype(np.intp)
+    return x0, np.maximum(x1, x0), y0, np.maximum(y1, y0)

@@ -26,7 +26,7 @@ import numpy as np
 
 from plugins.video_tracking.errors import TrackingError
 
-__all__ = ["number", "integer", "choice", "flag", "fraction", "instance"]
+__all__ = ["number", "integer", "choice", "flag", "fraction", "instance", "image_shape"]
 
 
 def number(name: str, value: object, *, minimum: float | None = None, positive: bool = False,
@@ -90,3 +90,15 @@ def instance(name: str, value: object, kind: type) -> object:
         article = "an" if kind.__name__[0] in "AEIOU" else "a"
         raise TrackingError(f"{name} must be {article} {kind.__name__}, got {type(value).__name__}")
     return value
+
+
+def image_shape(shape) -> tuple[int, int]:
+    """(H, W) of an image shape (H, W) or (H, W, C) with positive H and W."""
+    try:
+        dims = tuple(shape)
+    except TypeError:
+        dims = ()
+    if len(dims) not in (2, 3) or any(isinstance(d, bool) or not isinstance(d, (int, np.integer)) or d < 1
+                                       for d in dims[:2]):
+        raise TrackingError(f"image_shape must be (H, W) or (H, W, C) with positive H and W, got {shape!r}")
+    return int(dims[0]), int(dims[1])

@@ -40,6 +40,7 @@ import numpy as np
 
 from plugins.video_tracking import checks
 from plugins.video_tracking.boxes import box_centres, check_boxes
+from plugins.video_tracking.detections import check_rows
 from plugins.video_tracking.errors import TrackingError, UnknownCueError
 
 __all__ = [
@@ -140,11 +141,7 @@ class Observation:
         object.__setattr__(self, "sizes", sizes)
         object.__setattr__(self, "previous_particles", _points("previous_particles", self.previous_particles))
         if self.detections is not None:
-            detections = np.asarray(self.detections, dtype=np.float64)
-            if detections.ndim != 2 or detections.shape[1] != 5 or not np.isfinite(detections).all() \
-                    or (detections[:, 2:4] <= 0).any():
-                raise TrackingError(f"detections must be a finite (n, 5) array x, y, w, h, score with positive "
-                                    f"sizes, got shape {detections.shape}")
+            detections = check_rows(self.detections, "Observation")
             object.__setattr__(self, "detections", detections)
             assigned = np.full(centres.shape[0], -1, np.intp) if self.assigned is None \
                 else np.asarray(self.assigned)
@@ -1418,9 +1415,9 @@ class DetectionCue:
         # gives −inf, a likelihood of zero, which the mass functions accept.
         with np.errstate(divide="ignore"):
             scores[:, tau] = np.log1p(-support.max(axis=1))
-            for j in np.flatnonzero(obs.assigned >= 0):
-                d = obs.assigned[j]
-                scores[:, j] = np.log1p(support[:, d] - reliability[d])
+            taken = np.flatnonzero(obs.assigned >= 0)
+            chosen = obs.assigned[taken]
+            scores[:, taken] = np.log1p(support[:, chosen] - reliability[chosen])
         return scores
 
 

@@ -15,7 +15,8 @@ import numpy as np
 
 from plugins.video_tracking.errors import DetectionFileError, TrackingError
 
-__all__ = ["Detections", "DETECTION_COLUMNS", "read_detections", "write_detections", "check_detections"]
+__all__ = ["Detections", "DETECTION_COLUMNS", "read_detections", "write_detections", "check_detections",
+           "check_rows"]
 
 #: The columns of one frame's detections, 0-based pixels.
 DETECTION_COLUMNS = ("x", "y", "w", "h", "score")
@@ -46,11 +47,8 @@ class Detections:
         self.source = source
         frames: dict[int, np.ndarray] = {}
         for frame, rows in (by_frame or {}).items():
-            array = np.asarray(rows, dtype=np.float64).reshape(-1, len(DETECTION_COLUMNS))
-            if not np.isfinite(array).all() or (array[:, 2:4] <= 0).any() \
-                    or (array[:, 4] < 0).any() or (array[:, 4] > 1).any():
-                raise TrackingError(f"{source}: frame {frame} has a detection with a non-finite value, "
-                                    f"a size that is not positive or a score outside [0, 1]")
+            array = check_rows(np.asarray(rows, dtype=np.float64).reshape(-1, len(DETECTION_COLUMNS)),
+                               f"{source}: frame {frame}")
             if len(array):
                 array.flags.writeable = False
                 frames[int(frame)] = array
@@ -71,6 +69,28 @@ class Detections:
 
     def __repr__(self) -> str:
         return f"Detections({len(self)} boxes over {len(self._frames)} frames from {self.source!r})"
+
+
+def check_rows(rows, where: str) -> np.ndarray:
+    """One frame's detections as a float (n, 5) array, or an error that says ``where`` and what is wrong.
+
+    Rows are ``x, y, w, h, score``: finite, with positive sizes and scores in [0, 1].
+
+    Examples
+    --------
+    >>> check_rows([[1, 2, 3, 4, 0.5]], "frame 1").tolist()
+    [[1.0, 2.0, 3.0, 4.0, 0.5]]
+    >>> check_rows([[1, 2, 3, 4, 1.5]], "frame 1")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    plugins.video_tracking.errors.TrackingError: frame 1: detections must be finite rows x, y, w, h, score ...
+    """
+    array = np.asarray(rows, dtype=np.float64)
+    if array.ndim != 2 or array.shape[1] != len(DETECTION_COLUMNS) or not np.isfinite(array).all() \
+            or (array[:, 2:4] <= 0).any() or (array[:, 4] < 0).any() or (array[:, 4] > 1).any():
+        raise TrackingError(f"{where}: detections must be finite rows x, y, w, h, score with positive sizes "
+                            f"and scores in [0, 1]")
+    return array
 
 
 #: Fields a detection line must have: frame, id (unused, -1), x, y, w, h, score.
@@ -128,6 +148,7 @@ def read_detections(path: str | PathLike[str], *, frame_count: int | None = None
     plugins.video_tracking.errors.DetectionFileError: .../det.txt, line 1: the score 1.5 is outside [0, 1] ...
     """
     from belief.textfiles import read_text
+    from plugins.video_tracking.motfiles import text_lines
 
     name = str(path)
     text = read_text(path, "detection file", DetectionFileError, encoding="utf-8-sig")
@@ -135,12 +156,7 @@ def read_detections(path: str | PathLike[str], *, frame_count: int | None = None
                                     or frame_count < 1):
         raise TrackingError(f"frame_count must be a positive integer or None, got {frame_count!r}")
     by_frame: dict[int, list[list[float]]] = {}
-    for line_number, line in enumerate(text.splitlines(), start=1):
-        stripped = line.strip()
-        if not stripped:
-            continue
-        where = f"{name}, line {line_number}"
-        fields_ = [f.strip() for f in stripped.split(",")] if "," in stripped else stripped.split()
+    for _, where, fields_ in text_lines(text, name):
         if len(fields_) < _DETECTION_FIELDS:
             raise DetectionFileError(f"{where}: expected at least {_DETECTION_FIELDS} fields "
                                      f"(frame,-1,x,y,w,h,score,...), got {len(fields_)}")

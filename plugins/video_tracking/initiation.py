@@ -36,7 +36,7 @@ import numpy as np
 
 from belief.textfiles import read_text
 from plugins.video_tracking import checks
-from plugins.video_tracking.boxes import check_boxes
+from plugins.video_tracking.boxes import check_boxes, pixel_ranges
 from plugins.video_tracking.errors import InitError, TrackingError
 from plugins.video_tracking.motfiles import read_mot
 
@@ -382,22 +382,11 @@ class InitiationConfig:
 
     def min_area_pixels(self, image_shape: tuple[int, int]) -> float:
         """The smallest blob area in pixels, ``min_area · W · H``, for an image of shape (H, W)."""
-        height, width = _image_shape(image_shape)
+        height, width = checks.image_shape(image_shape)
         return self.min_area * height * width
 
 
 # -- input checks ---------------------------------------------------------------------------------
-def _image_shape(shape) -> tuple[int, int]:
-    try:
-        dims = tuple(shape)
-    except TypeError:
-        dims = ()
-    if len(dims) not in (2, 3) or any(isinstance(d, bool) or not isinstance(d, (int, np.integer)) or d < 1
-                                       for d in dims[:2]):
-        raise TrackingError(f"image_shape must be (H, W) or (H, W, C) with positive H and W, got {shape!r}")
-    return int(dims[0]), int(dims[1])
-
-
 def _checked_mask(mask, shape: tuple[int, int] | None = None) -> np.ndarray:
     mask = np.asarray(mask)
     if mask.ndim != 2 or mask.dtype != np.bool_ or (shape is not None and mask.shape != shape):
@@ -471,17 +460,6 @@ def foreground_blobs(mask: np.ndarray, min_area_pixels: float, opening: int = 3)
     return boxes[order]
 
 
-def _pixel_ranges(boxes: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray, ...]:
-    """First and one-past-last pixel columns and rows of each box, clipped to the image."""
-    height, width = shape
-    # Pixel i is in [x, x + w) when its centre i + 1/2 is: i from ceil(x - 1/2) to ceil(x + w - 1/2) - 1.
-    x0 = np.clip(np.ceil(boxes[:, 0] - 0.5), 0, width).astype(np.intp)
-    x1 = np.clip(np.ceil(boxes[:, 0] + boxes[:, 2] - 0.5), 0, width).astype(np.intp)
-    y0 = np.clip(np.ceil(boxes[:, 1] - 0.5), 0, height).astype(np.intp)
-    y1 = np.clip(np.ceil(boxes[:, 1] + boxes[:, 3] - 0.5), 0, height).astype(np.intp)
-    return x0, np.maximum(x1, x0), y0, np.maximum(y1, y0)
-
-
 def foreground_fraction(mask: np.ndarray, boxes) -> np.ndarray:
     """Fraction of the pixels of each box that are foreground, counting only pixels inside the image.
 
@@ -516,7 +494,7 @@ def foreground_fraction(mask: np.ndarray, boxes) -> np.ndarray:
     boxes = check_boxes(boxes, "boxes", positive=False)
     integral = np.zeros((mask.shape[0] + 1, mask.shape[1] + 1), dtype=np.int64)
     np.cumsum(np.cumsum(mask, axis=0, dtype=np.int64), axis=1, out=integral[1:, 1:])
-    x0, x1, y0, y1 = _pixel_ranges(boxes, mask.shape)
+    x0, x1, y0, y1 = pixel_ranges(boxes, mask.shape)
     foreground = integral[y1, x1] - integral[y0, x1] - integral[y1, x0] + integral[y0, x0]
     pixels = (x1 - x0) * (y1 - y0)
     return np.divide(foreground, pixels, out=np.zeros(len(boxes)), where=pixels > 0)

@@ -26,6 +26,8 @@ the counters and the chains.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from plugins.video_tracking.association import UNASSIGNED
@@ -38,7 +40,7 @@ __all__ = ["Lifecycle", "FrameOutcome", "DUPLICATE_INSIDE"]
 DUPLICATE_INSIDE = 0.7
 
 
-class FrameOutcome:
+class FrameOutcome(NamedTuple):
     """What :meth:`Lifecycle.update` decided for one frame.
 
     Attributes
@@ -51,13 +53,9 @@ class FrameOutcome:
         Ids of the tracks that end this frame (left the image, or duplicates).
     """
 
-    __slots__ = ("births", "lost", "ended")
-
-    def __init__(self, births: np.ndarray, lost: list[int], ended: list[int]) -> None:
-        self.births, self.lost, self.ended = births, lost, ended
-
-    def __repr__(self) -> str:
-        return f"FrameOutcome(births={self.births.tolist()}, lost={self.lost}, ended={self.ended})"
+    births: np.ndarray
+    lost: list[int]
+    ended: list[int]
 
 
 class Lifecycle:
@@ -144,9 +142,10 @@ class Lifecycle:
         first = self._frames == 0
         self._frames += 1
         boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-        candidates = np.asarray(candidates, dtype=np.float64).reshape(-1, candidates.shape[1] if
-                                                                       np.ndim(candidates) == 2 else 4)[:, :4]
-        took = np.asarray(assigned) != UNASSIGNED
+        candidates = np.asarray(candidates, dtype=np.float64)
+        candidates = candidates[:, :4] if candidates.ndim == 2 else candidates.reshape(-1, 4)
+        assigned = np.asarray(assigned)
+        took = assigned != UNASSIGNED
         supported = took.copy()
         # Foreground and appearance support a track only where no other track took a
         # candidate: a second track on someone already followed sees their pixels too.
@@ -158,7 +157,7 @@ class Lifecycle:
         lost, ended = self._track_counters(ids, boxes, supported)
 
         taken = np.zeros(len(candidates), dtype=bool)
-        taken[np.asarray(assigned)[supported & (np.asarray(assigned) >= 0)]] = True
+        taken[assigned[took]] = True
         gone = set(lost) | set(ended)
         live = np.array([track_id not in gone for track_id in ids], dtype=bool)
         free = ~taken & ~self._covered(candidates, boxes[live])

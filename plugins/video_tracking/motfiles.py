@@ -9,7 +9,7 @@ converts at these readers and writers.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from os import PathLike
 
 import numpy as np
@@ -17,7 +17,7 @@ import numpy as np
 from belief.textfiles import read_text
 from plugins.video_tracking.errors import TrackFileError
 
-__all__ = ["MOT_COLUMNS", "read_mot", "write_tracks"]
+__all__ = ["MOT_COLUMNS", "read_mot", "write_tracks", "text_lines"]
 
 #: Columns of the array returned by :func:`read_mot`.  ``flag`` is the 7th column of the
 #: file: for ground truth, 0 means "not scored"; for tracker output it is a confidence,
@@ -26,6 +26,25 @@ MOT_COLUMNS = ("frame", "id", "x", "y", "width", "height", "flag")
 
 _FRAME, _ID, _X, _Y, _W, _H, _FLAG = range(len(MOT_COLUMNS))
 _MIN_FIELDS, _MAX_FIELDS = 6, 10
+
+
+def text_lines(text: str, name: str) -> Iterator[tuple[int, str, list[str]]]:
+    """The fields of each non-blank line of a MOTChallenge text file, with where the line is.
+
+    Fields are separated by commas (or, in a file without commas, by blanks).  Yields
+    ``(N, where, fields)`` with the 1-based line number N and ``where`` = ``"NAME, line N"``,
+    for messages.
+
+    Examples
+    --------
+    >>> list(text_lines("1, 2,3\\n\\n4 5", "f.txt"))
+    [(1, 'f.txt, line 1', ['1', '2', '3']), (3, 'f.txt, line 3', ['4', '5'])]
+    """
+    for line_number, line in enumerate(text.splitlines(), start=1):
+        stripped = line.strip()
+        if stripped:
+            fields = [f.strip() for f in stripped.split(",")] if "," in stripped else stripped.split()
+            yield line_number, f"{name}, line {line_number}", fields
 
 
 def read_mot(path: str | PathLike[str], *, allow_empty: bool = False) -> np.ndarray:
@@ -78,12 +97,7 @@ def read_mot(path: str | PathLike[str], *, allow_empty: bool = False) -> np.ndar
 
     rows: list[list[float]] = []
     first_line_of: dict[tuple[int, int], int] = {}
-    for line_number, line in enumerate(text.splitlines(), start=1):
-        stripped = line.strip()
-        if not stripped:
-            continue
-        where = f"{name}, line {line_number}"
-        fields_ = [f.strip() for f in stripped.split(",")] if "," in stripped else stripped.split()
+    for line_number, where, fields_ in text_lines(text, name):
         if not _MIN_FIELDS <= len(fields_) <= _MAX_FIELDS:
             raise TrackFileError(
                 f"{where}: expected {_MIN_FIELDS} to {_MAX_FIELDS} fields "

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from plugins.video_tracking.boxes import check_boxes
+from plugins.video_tracking import checks
 from plugins.video_tracking.errors import TrackingError
 
 __all__ = ["PerspectiveScale", "PersonSize", "MAX_SCALE_CHANGE"]
@@ -221,7 +222,7 @@ class PersonSize:
                 raise TrackingError(f"{name} must be a finite number >= 0, got {value!r}")
         keep = boxes[:, 3] >= _MIN_ELONGATION * boxes[:, 2]
         if image_shape is not None:
-            height, width = _image_size(image_shape)
+            height, width = checks.image_shape(image_shape)
             keep &= (boxes[:, 0] >= border) & (boxes[:, 1] >= border) \
                 & (boxes[:, 0] + boxes[:, 2] <= width - border) & (boxes[:, 1] + boxes[:, 3] <= height - border)
         boxes = boxes[keep]
@@ -290,16 +291,6 @@ def _numeric(values) -> bool:
         return False
     return array.dtype.kind in "iuf"
 
-
-def _image_size(shape) -> tuple[int, int]:
-    try:
-        dims = tuple(shape)
-    except TypeError:
-        dims = ()
-    if len(dims) not in (2, 3) or any(isinstance(d, bool) or not isinstance(d, (int, np.integer)) or d < 1
-                                       for d in dims[:2]):
-        raise TrackingError(f"image_shape must be (H, W) or (H, W, C) with positive H and W, got {shape!r}")
-    return int(dims[0]), int(dims[1])
 
 
 def _theil_sen(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:

@@ -44,7 +44,7 @@ from plugins.video_tracking.blobs import box_mask
 from plugins.video_tracking.candidates import BlobCandidates
 from plugins.video_tracking.config import TrackerConfig
 from plugins.video_tracking.cues import CUES, AppearanceCue, Observation, bhattacharyya
-from plugins.video_tracking.detections import Detections
+from plugins.video_tracking.detections import Detections, check_rows
 from plugins.video_tracking.errors import InitError, TrackingError
 from plugins.video_tracking.initiation import InitPlan
 from plugins.video_tracking.particles import CX, CY, LOG_SCALE, VX, VY, ConstantVelocity, ParticleSet, adaptive_count
@@ -279,7 +279,7 @@ class Tracker:
         image = self._begin(frame, image)
         detector = detections is not None
         if detector:
-            detections = self._checked_detections(frame, detections)
+            detections = check_rows(detections, f"frame {frame}")
         # With a detector the candidates come from it: the mask is needed only by a cue.
         needs_mask = self.background is not None and ("foreground" in self.config.cues or not detector)
         foreground = None
@@ -310,8 +310,8 @@ class Tracker:
             records = self._diagnose(obs, evidence, weighing, weighted)
             self._resample(weighted, records)
             if assigned is not None:
-                self.tracks.follow_candidates(assigned, candidates, detector)
-            if self.tracks.lifecycle is not None:
+                self.tracks.follow_candidates(frame, assigned, candidates, detector)
+            if self.tracks.lifecycle is not None and self.config.initiation.appearance_support is not None:
                 likeness = self._likeness(obs)
             estimates = [Estimate(frame, t.id, t.estimate.copy(), t.box()) for t in self.targets]
             diagnostics = FrameDiagnostics(self.diagnostic_columns, tuple(t.id for t in self.targets),
@@ -339,15 +339,6 @@ class Tracker:
         owner = np.arange(len(states))
         rho = [np.diagonal(bhattacharyya(cue.histograms(obs, states, owner), cue.templates)) for cue in cues]
         return np.min(rho, axis=0)
-
-    def _checked_detections(self, frame: int, detections) -> np.ndarray:
-        """A frame's detections at the boundary: a finite (n, 5) array with positive sizes and scores in [0, 1]."""
-        rows = np.asarray(detections, dtype=np.float64)
-        if rows.ndim != 2 or rows.shape[1] != 5 or not np.isfinite(rows).all() or (rows[:, 2:4] <= 0).any() \
-                or (rows[:, 4] < 0).any() or (rows[:, 4] > 1).any():
-            raise TrackingError(f"frame {frame}: detections must be a finite (n, 5) array x, y, w, h, score with "
-                                f"positive sizes and scores in [0, 1], got shape {rows.shape}")
-        return rows
 
     def _candidates(self, detections: np.ndarray | None, foreground: np.ndarray | None) -> np.ndarray | None:
         """The frame's candidate boxes ``x, y, w, h, score``: the detections, else the foreground's person blobs."""

@@ -132,7 +132,6 @@ class TrackManager:
         self.lifecycle: Lifecycle | None = None
         self.lost: dict[int, _LostTarget] = {}
         self._last_seen: dict[int, tuple[int, np.ndarray]] = {}
-        self._frame = 0
         self._image_shape: tuple[int, int] | None = None
         self._birth_boxes: list[tuple[float, float, float, float]] = []
         planned = [t.id for t in plan.targets] if plan is not None else []
@@ -233,7 +232,6 @@ class TrackManager:
             unseen for longer than ``coast_frames`` are left out; those of newborn targets
             are appended (their birth boxes).
         """
-        self._frame = frame
         # The lifecycle reads the targets that went through this frame's filter; planned
         # births join it from the next frame.
         tracked = len(estimates)
@@ -267,7 +265,8 @@ class TrackManager:
             estimates.append(self._reidentify(estimate, frame))
         return estimates
 
-    def follow_candidates(self, assigned: np.ndarray, candidates: np.ndarray, detector: bool = False) -> None:
+    def follow_candidates(self, frame: int, assigned: np.ndarray, candidates: np.ndarray,
+                          detector: bool = False) -> None:
         """Targets that took a candidate move towards it: size by ``size_smoothing``, centre by ``centre_gain``.
 
         A detection moves the size by ``detection_size_smoothing`` instead: a detector's boxes
@@ -288,7 +287,7 @@ class TrackManager:
             if k < 0:
                 continue
             x, y, w, h, score = candidates[k]
-            self._last_seen[target.id] = (self._frame, np.array([x, y, w, h]))
+            self._last_seen[target.id] = (frame, np.array([x, y, w, h]))
             width = min(w, initiation.max_aspect * h) if detector else w
             step = initiation.detection_size_smoothing if detector else rate
             target.size = (1.0 - step) * target.size + step * np.array([width, h])

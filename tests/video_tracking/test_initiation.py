@@ -148,9 +148,6 @@ def test_foreground_fraction_of_no_boxes_and_bad_inputs():
 # -- deaths --------------------------------------------------------------------------------------------
 
 
-# -- a whole scene -------------------------------------------------------------------------------------
-
-
 # -- configuration and input errors --------------------------------------------------------------------
 
 @pytest.mark.parametrize("field, value", [
@@ -163,6 +160,9 @@ def test_foreground_fraction_of_no_boxes_and_bad_inputs():
     ("exit_foreground", 0.0), ("exit_foreground", 2.0),
     ("lost_frames", 0), ("lost_frames", 2.5),
     ("first_frame", "yes"), ("first_frame", 1),
+    ("coast_frames", -1), ("appearance_support", 1.5), ("anywhere", "no"), ("match_iou", 0.0),
+    ("memory", -1), ("reid_similarity", 0.0), ("size_smoothing", 0.0), ("detection_size_smoothing", 1.5),
+    ("max_aspect", 0.0), ("centre_gain", -0.1), ("duplicate_iou", 0.0), ("duplicate_frames", 0),
 ])
 def test_bad_configurations_name_the_field(field, value):
     with pytest.raises(TrackingError, match=f"InitiationConfig.{field} "):

@@ -160,6 +160,15 @@ def test_the_detections_cue_refuses_inconsistent_assignments():
         observation([[40, 30, -20, 40, 0.6]], [0, -1])
 
 
+def test_a_tracker_refuses_bad_detections_naming_the_frame():
+    scene = scenes.render(scenes.crossing(0))
+    tracker = Tracker(TrackerConfig(particles=10, initiation=InitiationConfig()), None, np.random.default_rng(0))
+    tracker.step(1, scene.frames[0], np.zeros((0, 5)))
+    for bad in ([[1, 2, 3, 4]], [[1, 2, -3, 4, 0.5]], [[1, 2, 3, 4, 1.5]], [[np.nan, 2, 3, 4, 0.5]]):
+        with pytest.raises(TrackingError, match="frame 2: detections must be finite rows"):
+            tracker.step(2, scene.frames[1], np.array(bad, dtype=float))
+
+
 # -- end to end -------------------------------------------------------------------------------------
 def test_a_person_lost_behind_a_wall_takes_back_their_id_when_they_come_out():
     scene = scenes.render(scenes.lost_and_found(0))
