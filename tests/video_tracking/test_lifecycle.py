@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from plugins.video_tracking import scenes
-from plugins.video_tracking.association import UNASSIGNED, assign
+from plugins.video_tracking.association import UNASSIGNED, assign, min_cost_assignment
 from plugins.video_tracking.boxes import iou
 from plugins.video_tracking.config import TrackerConfig
 from plugins.video_tracking.cues import DetectionConfig, DetectionCue, Observation
@@ -57,6 +57,37 @@ def test_the_assignment_is_one_to_one_gated_and_has_the_most_pairs_and_overlap(t
             assert overlap >= gate
             total += 1.0 + overlap
     assert total == pytest.approx(brute_force_best_total(tracks, candidates, gate), abs=1e-9)
+
+
+costs = st.integers(0, 6).flatmap(lambda n: st.integers(0, 6).flatmap(
+    lambda m: st.lists(st.lists(st.sampled_from([0.0, 0.25, 0.5, 1.0, 2.0, 0.3, 0.7]) | st.floats(0, 5),
+                                min_size=m, max_size=m), min_size=n, max_size=n).map(
+        lambda rows: np.array(rows, dtype=float).reshape(n, m))))
+
+
+@settings(max_examples=150, deadline=None)
+@given(costs)
+def test_the_hungarian_solver_finds_the_cheapest_full_pairing(cost):
+    rows, cols = min_cost_assignment(cost)
+    n, m = cost.shape
+    assert len(rows) == len(cols) == min(n, m)
+    assert len(set(rows.tolist())) == len(rows) and len(set(cols.tolist())) == len(cols)
+    assert rows.tolist() == sorted(rows.tolist())
+    # Brute force over every injective map of the smaller side into the larger one.
+    if n <= m:
+        best = min((sum(cost[i, j] for i, j in enumerate(p)) for p in itertools.permutations(range(m), n)),
+                   default=0.0)
+    else:
+        best = min((sum(cost[i, j] for j, i in enumerate(p)) for p in itertools.permutations(range(n), m)),
+                   default=0.0)
+    assert cost[rows, cols].sum() == pytest.approx(best, abs=1e-9)
+
+
+def test_the_hungarian_solver_refuses_a_cost_it_cannot_solve():
+    with pytest.raises(TrackingError, match="finite 2-D"):
+        min_cost_assignment([[0.0, np.nan]])
+    with pytest.raises(TrackingError, match="finite 2-D"):
+        min_cost_assignment([1.0, 2.0])
 
 
 def test_bad_assignment_inputs_are_refused():
