@@ -19,6 +19,9 @@ __all__ = [
     "TotalConflictError",
     "FormatError",
     "UndefinedTransformError",
+    "MeasureOptionError",
+    "UnknownMeasureError",
+    "UndefinedMeasureError",
 ]
 
 
@@ -60,3 +63,15 @@ class FormatError(BeliefError, ValueError):
 
 class UndefinedTransformError(BeliefError, ArithmeticError):
     """A transformation is undefined for this input (e.g. DSmP with ε = 0 and no singleton mass)."""
+
+
+class MeasureOptionError(BeliefError, ValueError):
+    """An option of a decision, distance or uncertainty measure is not acceptable (e.g. a negative tolerance)."""
+
+
+class UnknownMeasureError(MeasureOptionError):
+    """A decision criterion, distance or uncertainty measure that is not known; the message lists the known ones."""
+
+
+class UndefinedMeasureError(UndefinedTransformError):
+    """A measure is undefined for this input: a model it is not defined on, or mass on ∅ where it allows none."""
