@@ -98,7 +98,7 @@ class Frame:
     3
     """
 
-    __slots__ = ("_names", "_index", "_hash")
+    __slots__ = ("_names", "_index", "_hash", "_bit")
 
     def __init__(self, hypotheses: Sequence[str]) -> None:
         if isinstance(hypotheses, str):
@@ -117,6 +117,7 @@ class Frame:
             seen.add(name)
         self._names = names
         self._index = {name: i for i, name in enumerate(names)}
+        self._bit = {name: 1 << i for i, name in enumerate(names)}
         self._hash = hash(("belief.Frame", names))
 
     @classmethod
@@ -179,23 +180,23 @@ class Frame:
             ) from None
 
     def __getitem__(self, name: str) -> "Element":
-        return Element._make(self, (1 << self.index(name),))
+        return _make(self, (1 << self.index(name),))
 
     # -- distinguished elements ----------------------------------------------------
     @property
     def empty(self) -> "Element":
         """The empty element ∅."""
-        return Element._make(self, ())
+        return _make(self, ())
 
     @property
     def total(self) -> "Element":
         """Total ignorance θ_1 ∪ … ∪ θ_n."""
-        return Element._make(self, tuple(1 << i for i in range(len(self._names))))
+        return _make(self, tuple(1 << i for i in range(len(self._names))))
 
     @property
     def singletons(self) -> tuple["Element", ...]:
         """The elements θ_1, …, θ_n."""
-        return tuple(Element._make(self, (1 << i,)) for i in range(len(self._names)))
+        return tuple(_make(self, (1 << i,)) for i in range(len(self._names)))
 
     def conjunction(self, names: Iterable[str]) -> "Element":
         """The intersection of the named hypotheses.
@@ -208,7 +209,7 @@ class Frame:
             mask |= 1 << self.index(name)
         if mask == 0:
             raise FrameError("a conjunction needs at least one hypothesis")
-        return Element._make(self, (mask,))
+        return _make(self, (mask,))
 
     def element(self, value: Union[str, "Element"]) -> "Element":
         """Coerce a proposition string (or an element of this frame) to an element.
@@ -224,8 +225,55 @@ class Frame:
                 )
             return value
         if isinstance(value, str):
+            terms = self.plain_terms(value)
+            if terms is not None:
+                return _make(self, terms)
             return _Parser(self, value).parse()
         raise TypeError(f"expected a proposition string or an Element, got {type(value).__name__}")
+
+    def plain_terms(self, text: str) -> tuple[int, ...] | None:
+        """The canonical conjunctions of a proposition written without parentheses, or None.
+
+        A union of intersections of hypothesis names (``a|b&c``) is read by splitting
+        the text, which costs far less than the general parser; anything else (parentheses,
+        ``∩``, ``∪``, ``∅``, ``empty``, an unknown name or a malformed text) gives None, and
+        :meth:`element` leaves it to the parser, which also names what is wrong.
+
+        >>> Frame(["a", "b", "c"]).plain_terms("c | b&a")
+        (3, 4)
+        >>> Frame(["a", "b", "c"]).plain_terms("(a|b)&c") is None
+        True
+        """
+        if "(" in text or "∩" in text or "∪" in text or "∅" in text:
+            return None
+        bit = self._bit
+        terms = []
+        single = True
+        for part in text.split("|"):
+            if "&" in part:
+                single = False
+                mask = 0
+                for name in part.split("&"):
+                    b = bit.get(name)
+                    if b is None:
+                        b = bit.get(name.strip())
+                        if b is None:
+                            return None
+                    mask |= b
+                terms.append(mask)
+            else:
+                b = bit.get(part)
+                if b is None:
+                    b = bit.get(part.strip())
+                    if b is None:
+                        return None
+                terms.append(b)
+        if single:
+            # Single hypotheses cannot absorb one another, and their masks sort in frame order.
+            if len(terms) > 1:
+                terms = sorted(set(terms))
+            return tuple(terms)
+        return reduce_terms(terms)
 
     def term_name(self, term: int, style: str = "ascii") -> str:
         """Name of one conjunction mask, e.g. ``a&b``."""
@@ -259,7 +307,19 @@ def _bits(mask: int) -> Iterator[int]:
         mask ^= low
 
 
-class Element:
+class _ElementSlots:
+    """The storage of :class:`Element`, shared with :class:`_Fresh` (see :func:`_make`)."""
+
+    __slots__ = ("frame", "terms", "_hash", "_key")
+
+
+class _Fresh(_ElementSlots):
+    """An element under construction: its slots take plain stores, then it becomes an :class:`Element`."""
+
+    __slots__ = ()
+
+
+class Element(_ElementSlots):
     """An element of the hyper-power set D^Θ, in canonical reduced form (SPEC A.1).
 
     Build elements through a :class:`Frame` (``frame["a"]``, ``frame.element("a&b|c")``)
@@ -285,7 +345,7 @@ class Element:
     a∩c ∪ b∩c
     """
 
-    __slots__ = ("frame", "terms", "_hash", "_key")
+    __slots__ = ()
 
     frame: Frame
     terms: tuple[int, ...]
@@ -301,18 +361,13 @@ class Element:
             checked.append(term)
         object.__setattr__(self, "frame", frame)
         object.__setattr__(self, "terms", reduce_terms(checked))
-        object.__setattr__(self, "_hash", hash((frame, self.terms)))
+        object.__setattr__(self, "_hash", None)
         object.__setattr__(self, "_key", None)
 
     @classmethod
     def _make(cls, frame: Frame, terms: tuple[int, ...]) -> "Element":
         """Build from an already reduced, sorted antichain (no checks)."""
-        obj = object.__new__(cls)
-        object.__setattr__(obj, "frame", frame)
-        object.__setattr__(obj, "terms", terms)
-        object.__setattr__(obj, "_hash", hash((frame, terms)))
-        object.__setattr__(obj, "_key", None)
-        return obj
+        return _make(frame, terms)
 
     def __setattr__(self, name: str, value: object) -> None:
         raise AttributeError("Element is immutable")
@@ -332,11 +387,11 @@ class Element:
 
     def __and__(self, other: Union["Element", str]) -> "Element":
         other = self._other(other)
-        return Element._make(self.frame, reduce_terms(a | b for a in self.terms for b in other.terms))
+        return _make(self.frame, reduce_terms(a | b for a in self.terms for b in other.terms))
 
     def __or__(self, other: Union["Element", str]) -> "Element":
         other = self._other(other)
-        return Element._make(self.frame, reduce_terms(self.terms + other.terms))
+        return _make(self.frame, reduce_terms(self.terms + other.terms))
 
     __rand__ = __and__
     __ror__ = __or__
@@ -361,7 +416,11 @@ class Element:
         return self.terms == other.terms and self.frame == other.frame
 
     def __hash__(self) -> int:
-        return self._hash
+        h = self._hash
+        if h is None:
+            h = hash((self.frame._hash, self.terms))
+            object.__setattr__(self, "_hash", h)
+        return h
 
     def __bool__(self) -> bool:
         return bool(self.terms)
@@ -413,6 +472,41 @@ class Element:
 
     def __repr__(self) -> str:
         return f"Element({self.format('ascii')!r})"
+
+
+def _make(frame: Frame, terms: tuple[int, ...]) -> Element:
+    """An :class:`Element` from an already reduced, sorted antichain, without checks.
+
+    The slots are filled by plain stores on a :class:`_Fresh` object, which then takes the
+    class :class:`Element` (the two share one layout): three times cheaper than storing
+    through ``object.__setattr__`` past :meth:`Element.__setattr__`, and combinations build
+    one element per focal element of their result.  The hash is computed on first use.
+    """
+    obj = _new(_Fresh)
+    obj.frame = frame
+    obj.terms = terms
+    obj._hash = None
+    obj._key = None
+    obj.__class__ = Element
+    return obj
+
+
+def make_elements(frame: Frame, terms: Iterable[tuple[int, ...]]) -> list[Element]:
+    """Elements from canonical antichains, in order (:func:`_make` for each)."""
+    out = []
+    append = out.append
+    for t in terms:
+        obj = _new(_Fresh)
+        obj.frame = frame
+        obj.terms = t
+        obj._hash = None
+        obj._key = None
+        obj.__class__ = Element
+        append(obj)
+    return out
+
+
+_new = object.__new__
 
 
 # -- parsing -----------------------------------------------------------------------------

@@ -14,9 +14,9 @@ from typing import Any, Union
 
 import numpy as np
 
-from belief.batch import MassBatch, check_masses, resolve_model
+from belief.batch import SUM_TOLERANCE, MassBatch, check_masses, resolve_model
 from belief.errors import FormatError, InvalidMassError
-from belief.frame import Element, Frame
+from belief.frame import Element, Frame, make_elements
 from belief.model import Model
 
 __all__ = ["MassFunction"]
@@ -70,6 +70,80 @@ class MassFunction(Mapping):
         if not isinstance(masses, Mapping):
             raise InvalidMassError(f"masses must be a mapping of propositions to numbers, got {type(masses).__name__}")
         model = resolve_model(frame, model)
+        if not self._plain_init(masses, model):
+            self._checked_init(masses, model, subnormal)
+
+    def _plain_init(self, masses: Mapping[Query, float], model: Model) -> bool:
+        """Build from a mapping that needs no merging, no ∅ and no error, in one pass; False otherwise.
+
+        Propositions without parentheses are read by :meth:`Frame.plain_terms`, elements are
+        made once, in canonical order, and the masses are checked in Python (a handful of
+        numbers costs less than numpy's calls).  Anything unusual (two keys for one element,
+        an element empty under the model, a mass that is not a finite non-negative number, a
+        sum other than one) returns False before anything is set, and
+        :meth:`_checked_init` then builds the mass function or raises the error.
+        """
+        frame = model.frame
+        plain = frame.plain_terms
+        shafer = model.kind == "shafer"
+        forbidden = model.forbidden and not shafer
+        seen: set[tuple[int, ...]] = set()
+        items = []
+        single = True
+        for key, value in masses.items():
+            if type(key) is str:
+                terms = plain(key)
+                if terms is None:
+                    return False
+            elif isinstance(key, Element) and key.frame == frame:
+                terms = key.terms
+            else:
+                return False
+            if type(value) is not float:
+                if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+                    return False
+                value = float(value)
+            if not 0.0 <= value < math.inf:
+                return False
+            if shafer:
+                if len(terms) == 1:
+                    if terms[0] & (terms[0] - 1):
+                        return False
+                else:
+                    terms = tuple(t for t in terms if not t & (t - 1))
+            elif forbidden:
+                terms = model.kept_terms(terms)
+            if not terms or terms in seen:
+                return False
+            seen.add(terms)
+            if value > 0.0:
+                if single and not shafer:
+                    for t in terms:
+                        if t & (t - 1):
+                            single = False
+                            break
+                items.append((terms, value))
+        if not items or abs(math.fsum([v for _, v in items]) - 1.0) > SUM_TOLERANCE:
+            return False
+        if single:
+            # Unions of hypotheses: the canonical order is by the number of hypotheses, then their positions.
+            items.sort(key=_plain_key)
+            focal = tuple(make_elements(frame, [t for t, _ in items]))
+        else:
+            pairs = sorted(zip(make_elements(frame, [t for t, _ in items]), [v for _, v in items]),
+                           key=_sort_key)
+            focal = tuple(e for e, _ in pairs)
+            items = pairs
+        values = np.array([v for _, v in items], dtype=np.float64)
+        values.flags.writeable = False
+        object.__setattr__(self, "model", model)
+        object.__setattr__(self, "focal", focal)
+        object.__setattr__(self, "values", values)
+        object.__setattr__(self, "_batch", None)
+        object.__setattr__(self, "_hash", None)
+        return True
+
+    def _checked_init(self, masses: Mapping[Query, float], model: Model, subnormal: bool) -> None:
         merged: dict[Element, list[float]] = {}
         for key, value in masses.items():
             element = model.frame.element(key)
@@ -372,6 +446,16 @@ class MassFunction(Mapping):
         except json.JSONDecodeError as exc:
             raise FormatError(f"not valid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}") from None
         return cls.from_dict(data)
+
+
+def _plain_key(item: tuple[tuple[int, ...], float]) -> tuple:
+    """Canonical order of an element whose conjunctions are single hypotheses (see ``Element.sort_key``)."""
+    terms = item[0]
+    return len(terms), terms
+
+
+def _sort_key(item: tuple[Element, float]) -> tuple:
+    return item[0].sort_key
 
 
 def _as_mass(value: Any, key: Any) -> float:

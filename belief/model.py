@@ -158,6 +158,20 @@ class Model:
             return term.bit_count() > 1
         return any(f & ~term == 0 for f in self.forbidden)
 
+    def kept_terms(self, terms: tuple[int, ...]) -> tuple[int, ...]:
+        """The conjunctions of a canonical antichain that the model allows (its form under the model).
+
+        >>> from belief import Frame
+        >>> Model.hybrid(Frame(["a", "b", "c"]), empty=["a&b"]).kept_terms((3, 4))
+        (4,)
+        """
+        forbidden = self.forbidden
+        if not forbidden:
+            return terms
+        if self.kind == "shafer":
+            return tuple(t for t in terms if not t & (t - 1))
+        return tuple(t for t in terms if not any(f & ~t == 0 for f in forbidden))
+
     def reduce(self, element: Union[Element, str]) -> Element:
         """The canonical form of an element under this model (forbidden conjunctions dropped)."""
         if not (isinstance(element, Element) and element.frame is self.frame):
