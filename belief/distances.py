@@ -38,7 +38,7 @@ __all__ = ["jousselme_distance", "euclidean_distance", "tessem_distance", "dista
 Source = Union[MassFunction, MassBatch]
 
 
-# -- shared helpers ---------------------------------------------------------------------------------
+# -- shared machinery -------------------------------------------------------------------------------
 def _as_batch(source: Source, what: str = "source") -> tuple[MassBatch, bool]:
     """The source as a batch, and whether it was a single mass function."""
     if isinstance(source, MassFunction):
