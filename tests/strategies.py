@@ -351,3 +351,75 @@ def fusion_cases(draw, min_sources: int = 2, max_sources: int = 4, min_n: int = 
         sources.append(tuple(zip(focal, exact_weights(weights))))
     return FusionCase(case, fusion, tuple(sources))
 
+
+
+# -- mass functions on 2^Θ as exact masses of subsets (representations, cautious and bold rules) ------------
+
+
+def subset_text(frame: Frame, mask: int) -> str:
+    """A subset of Θ (bit i = the i-th hypothesis) written by hand: names joined by '|', or 'empty'."""
+    names = [name for i, name in enumerate(frame.hypotheses) if mask >> i & 1]
+    return "|".join(names) if names else "empty"
+
+
+@dataclass(frozen=True)
+class SubsetMass:
+    """A mass function on Shafer's model as exact masses of subsets (bit masks over the hypotheses)."""
+
+    frame: Frame
+    masses: tuple[tuple[int, Fraction], ...]
+
+    @property
+    def n(self) -> int:
+        return len(self.frame)
+
+    @property
+    def model(self) -> Model:
+        return Model.shafer(self.frame)
+
+    def exact(self) -> dict[int, Fraction]:
+        return dict(self.masses)
+
+    def build(self) -> MassFunction:
+        return MassFunction({subset_text(self.frame, mask): float(v) for mask, v in self.masses},
+                            model=self.model, subnormal=True)
+
+
+@st.composite
+def subset_masses(draw, frame: Frame | None = None, min_n: int = 1, max_n: int = 4, max_focal: int = 5,
+                  total=None, empty=None) -> SubsetMass:
+    """Random mass functions on Shafer's model with exact masses.
+
+    ``total`` True forces m(Θ) > 0 (non-dogmatic), False forbids it, None leaves it to chance;
+    ``empty`` does the same for m(∅) (True: subnormal, False: normal).
+    """
+    if frame is None:
+        frame = draw(frames(min_n, max_n))
+    n = len(frame)
+    full = (1 << n) - 1
+    chosen = set(draw(st.lists(st.integers(1, full), min_size=1, max_size=max_focal)))
+    if empty is None:
+        empty = draw(st.booleans())
+    if empty:
+        chosen.add(0)
+    else:
+        chosen.discard(0)
+    if total is True:
+        chosen.add(full)
+    elif total is False:
+        chosen.discard(full)
+        if not chosen - {0}:
+            chosen.add(draw(st.integers(1, full - 1)) if full > 1 else 0)
+    assume(chosen and (empty is not False or chosen - {0}))
+    focal = sorted(chosen)
+    weights = draw(st.lists(st.integers(1, 12), min_size=len(focal), max_size=len(focal)))
+    return SubsetMass(frame, tuple(zip(focal, exact_weights(weights))))
+
+
+@st.composite
+def subset_mass_lists(draw, min_sources: int = 2, max_sources: int = 3, min_n: int = 1, max_n: int = 3,
+                      max_focal: int = 4, total=None, empty=None) -> list[SubsetMass]:
+    """Several exact mass functions on Shafer's model of one frame (options as :func:`subset_masses`)."""
+    frame = draw(frames(min_n, max_n))
+    count = draw(st.integers(min_sources, max_sources))
+    return [draw(subset_masses(frame, max_focal=max_focal, total=total, empty=empty)) for _ in range(count)]
