@@ -1,1 +1,0 @@
-"""Applications built on :mod:`belief`.  They import it; it never imports them."""
