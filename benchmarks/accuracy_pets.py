@@ -17,8 +17,8 @@ leave (SPEC B.4).  ``detections`` is ``belief track VIDEO --detections det.txt``
 as ``automatic``, with the sequence's ``det.txt`` (MOT15's public ACF detections) given to
 the tracker and the ``detections`` cue fused after the default cues; every other setting is
 the default.  Each run is a cell of ``belief experiment``
-(:func:`plugins.video_tracking.runs.run_cell`), scored by
-``plugins.video_tracking.evaluation.evaluate(gt, tracks)`` (IoU >= 0.5; ground-truth rows
+(:func:`belief_tracking.runs.run_cell`), scored by
+``belief_tracking.evaluation.evaluate(gt, tracks)`` (IoU >= 0.5; ground-truth rows
 with flag 0 ignored), so its figures are those of the comparison study
 (``benchmarks/comparison_study.py``) for the same configuration and seeds.  The table gives,
 per configuration, the mean over the seeds of MOTA, IDF1, the median centre error, the ID
@@ -54,8 +54,8 @@ from typing import NamedTuple
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from plugins.video_tracking.experiment import Cell, MethodSpec, SequenceSpec  # noqa: E402
-from plugins.video_tracking.runs import run_cell  # noqa: E402
+from belief_tracking.experiment import Cell, MethodSpec, SequenceSpec  # noqa: E402
+from belief_tracking.runs import run_cell  # noqa: E402
 
 DEFAULT_DATA = ROOT.parent / "shared" / "data" / "pets09_s2l1_f0001_0200"
 ALL_CUES = ["colour", "location", "foreground", "edges"]

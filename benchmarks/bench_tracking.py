@@ -1,4 +1,4 @@
-"""Benchmark: speed of the DSmT particle-filter tracker (plugins.video_tracking).
+"""Benchmark: speed of the DSmT particle-filter tracker (belief_tracking).
 
 Run from the repository root::
 
@@ -157,7 +157,7 @@ def minor_faults() -> int | None:
 def timed_steps(tracker, frames, detections=None) -> tuple[list[float], list[int], list[int] | None]:
     """``Tracker.step`` on every frame: the time of each, the live targets and the page faults of each.
 
-    ``detections`` (a :class:`~plugins.video_tracking.detections.Detections`, optional) gives
+    ``detections`` (a :class:`~belief_tracking.detections.Detections`, optional) gives
     each frame its boxes, looked up before the clock starts.
     """
     times, live, faults = [], [], []
@@ -187,7 +187,7 @@ def frame_statistics(times: list[float], faults: list[int] | None, skip: int) ->
 # -- (a) PETS -----------------------------------------------------------------------------------------
 def decode_pets(folder: Path, max_frames: int | None) -> tuple[list, float]:
     """The frames of the PETS video (the first ``max_frames``), decoded into memory, and the decoding time."""
-    from plugins.video_tracking.video import VideoReader
+    from belief_tracking.video import VideoReader
 
     frames = []
     with VideoReader(folder / "video.avi") as reader:
@@ -203,9 +203,9 @@ def pets_tracking_only(data: str, max_frames: int | None, skip: int, seed: int) 
     """Runs in a fresh process: decode every frame into memory, then time ``Tracker.step`` alone."""
     import numpy as np
 
-    from plugins.video_tracking.config import TrackerConfig
-    from plugins.video_tracking.initiation import init_from_gt
-    from plugins.video_tracking.tracker import Tracker
+    from belief_tracking.config import TrackerConfig
+    from belief_tracking.initiation import init_from_gt
+    from belief_tracking.tracker import Tracker
 
     folder = Path(data)
     frames, decode_seconds = decode_pets(folder, max_frames)
@@ -229,9 +229,9 @@ def pets_automatic(data: str, max_frames: int | None, skip: int, seed: int, with
     """
     import numpy as np
 
-    from plugins.video_tracking.experiment import Cell, MethodSpec, SequenceSpec
-    from plugins.video_tracking.sources import open_source
-    from plugins.video_tracking.tracker import Tracker
+    from belief_tracking.experiment import Cell, MethodSpec, SequenceSpec
+    from belief_tracking.sources import open_source
+    from belief_tracking.tracker import Tracker
 
     folder = Path(data)
     frames, decode_seconds = decode_pets(folder, max_frames)
@@ -258,10 +258,10 @@ def pets_overall(data: str, max_frames: int | None, seed: int) -> dict:
     """Runs in a fresh process: open, decode and track frame by frame, all on the clock."""
     import numpy as np
 
-    from plugins.video_tracking.config import TrackerConfig
-    from plugins.video_tracking.initiation import init_from_gt
-    from plugins.video_tracking.tracker import Tracker
-    from plugins.video_tracking.video import VideoReader
+    from belief_tracking.config import TrackerConfig
+    from belief_tracking.initiation import init_from_gt
+    from belief_tracking.tracker import Tracker
+    from belief_tracking.video import VideoReader
 
     folder = Path(data)
     plan = init_from_gt(folder / "gt.txt")
@@ -286,7 +286,7 @@ def bgr(hue: float, saturation: float, value: float) -> tuple[int, int, int]:
 
 def scene_config(tau: int, n_frames: int, seed: int):
     """τ walkers in distinct cells of an 8 x 4 grid, slow and far apart, in distinct colours."""
-    from plugins.video_tracking.scenes import SceneConfig, Walker
+    from belief_tracking.scenes import SceneConfig, Walker
 
     if not 1 <= tau <= GRID_COLUMNS * GRID_ROWS:
         raise ValueError(f"tau must lie in 1..{GRID_COLUMNS * GRID_ROWS}, got {tau}")
@@ -311,10 +311,10 @@ def synthetic(tau: int, n_frames: int, skip: int, seed: int) -> dict:
     """Runs in a fresh process: render the scene (untimed), then time ``Tracker.step`` per frame."""
     import numpy as np
 
-    from plugins.video_tracking.config import TrackerConfig
-    from plugins.video_tracking.initiation import init_from_gt
-    from plugins.video_tracking.scenes import render
-    from plugins.video_tracking.tracker import Tracker
+    from belief_tracking.config import TrackerConfig
+    from belief_tracking.initiation import init_from_gt
+    from belief_tracking.scenes import render
+    from belief_tracking.tracker import Tracker
 
     scene = render(scene_config(tau, n_frames, seed))
     plan = init_from_gt(scene.ground_truth, source=scene.config.name)

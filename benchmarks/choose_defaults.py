@@ -7,10 +7,10 @@ Run from the repository root::
     python benchmarks/choose_defaults.py --jobs 1              # one process (default: one per core)
     python benchmarks/choose_defaults.py --data DIR            # another copy of the PETS sequence
 
-Each candidate is a set of :class:`~plugins.video_tracking.config.TrackerConfig` settings
+Each candidate is a set of :class:`~belief_tracking.config.TrackerConfig` settings
 on top of the defaults, run as a user runs it:
 
-* every scene of :data:`plugins.video_tracking.scenes.PRESETS`, automatic (no ground truth
+* every scene of :data:`belief_tracking.scenes.PRESETS`, automatic (no ground truth
   given to the tracker, the background first learns from 50 frames spread over the scene,
   as ``belief track`` without an init file);
 * PETS 2009 S2.L1 frames 1-200 three ways: born from the ground truth (``--init-from-gt``),
@@ -57,9 +57,9 @@ PETS_RUNS = ("gt", "automatic", "detections")
 
 
 def _pets(data: Path):
-    from plugins.video_tracking.detections import read_detections
-    from plugins.video_tracking.motfiles import read_mot
-    from plugins.video_tracking.video import VideoReader
+    from belief_tracking.detections import read_detections
+    from belief_tracking.motfiles import read_mot
+    from belief_tracking.video import VideoReader
 
     with VideoReader(data / "video.avi") as reader:
         frames = np.array(list(reader))
@@ -70,11 +70,11 @@ def _pets(data: Path):
 
 def run(job: tuple) -> tuple:
     """One run: (candidate, task, seed, data) -> (candidate, task, seed, MOTA, IDF1)."""
-    from plugins.video_tracking import scenes
-    from plugins.video_tracking.config import TrackerConfig
-    from plugins.video_tracking.evaluation import evaluate
-    from plugins.video_tracking.initiation import init_from_gt
-    from plugins.video_tracking.tracker import Tracker
+    from belief_tracking import scenes
+    from belief_tracking.config import TrackerConfig
+    from belief_tracking.evaluation import evaluate
+    from belief_tracking.initiation import init_from_gt
+    from belief_tracking.tracker import Tracker
 
     name, task, seed, data = job
     settings = dict(CANDIDATES[name][0])
@@ -104,7 +104,7 @@ def run(job: tuple) -> tuple:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from plugins.video_tracking import scenes
+    from belief_tracking import scenes
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--candidates", nargs="+", choices=list(CANDIDATES), default=list(CANDIDATES))

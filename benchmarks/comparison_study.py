@@ -8,7 +8,7 @@ One command regenerates the whole results page of the documentation::
     python benchmarks/comparison_study.py --data DIR       # another copy of the PETS sequence
 
 The grid is ``benchmarks/comparison.toml`` (5 sequences x 9 methods x 5 seeds), run by
-:func:`plugins.video_tracking.grid.run_experiment`, so ``belief experiment
+:func:`belief_tracking.grid.run_experiment`, so ``belief experiment
 benchmarks/comparison.toml --data DIR`` gives the same ``results.csv``.  Finished runs are
 kept in ``--runs`` (default ``comparison_runs/``), so an interrupted study resumes.  The page
 (``docs/results.md``), its tables (``docs/results/*.csv``) and its figures
@@ -33,9 +33,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from plugins.video_tracking import scenes  # noqa: E402
-from plugins.video_tracking.experiment import load_experiment  # noqa: E402
-from plugins.video_tracking.grid import run_experiment  # noqa: E402
+from belief_tracking import scenes  # noqa: E402
+from belief_tracking.experiment import load_experiment  # noqa: E402
+from belief_tracking.grid import run_experiment  # noqa: E402
 
 CONFIG = ROOT / "benchmarks" / "comparison.toml"
 DEFAULT_DATA = ROOT.parent / "shared" / "data"
@@ -201,7 +201,7 @@ def _frames(spec, wanted: tuple[int, ...]) -> dict[int, np.ndarray]:
     if spec.scene is not None:
         scene = scenes.render(scenes.PRESETS[spec.scene](spec.scene_seed))
         return {f: scene.frames[f - 1] for f in wanted}
-    from plugins.video_tracking.video import VideoReader
+    from belief_tracking.video import VideoReader
 
     found = {}
     reader = VideoReader(spec.video)
@@ -319,7 +319,7 @@ def findings(summary: dict, sequences: list[str], methods: list[str]) -> list[st
 
 def same_runs(result, first: str, second: str) -> bool:
     """Whether two methods gave the same scores on every sequence and seed (floats to 1e-9)."""
-    from plugins.video_tracking.tables import SCORE_COLUMNS
+    from belief_tracking.tables import SCORE_COLUMNS
 
     rows = defaultdict(dict)
     for row in result.results:
@@ -412,7 +412,7 @@ def render_page(experiment, result, summary: dict, sequences: list[str], methods
         "## Set-up",
         "",
         "- **Sequences.** PETS 2009 S2.L1, frames 1–200 (real video, up to 8 people), and four synthetic scenes "
-        "of `plugins.video_tracking.scenes`: `crossing` (two people cross, one fully hidden for 7 frames), "
+        "of `belief_tracking.scenes`: `crossing` (two people cross, one fully hidden for 7 frames), "
         "`occlusion` (the `partial_occlusion` scene: a person half hidden by another, one behind a pillar), "
         "`illumination` (a global brightening, then a shadow) and `scale` (`scale_change`: people walking "
         "towards and away from the camera).",

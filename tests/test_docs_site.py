@@ -22,6 +22,6 @@ def test_the_site_builds_strictly_with_the_api_reference(tmp_path):
     assert 'id="belief.mass.MassFunction"' in reference
     assert 'id="belief.rules.combine"' in reference
     plugin = (site / "reference" / "video_tracking" / "index.html").read_text(encoding="utf-8")
-    assert 'id="plugins.video_tracking.config.TrackerConfig"' in plugin
+    assert 'id="belief_tracking.config.TrackerConfig"' in plugin
     # Sphinx roles in docstrings are turned into code or links, never shown raw.
     assert ":class:`" not in reference and ":class:`" not in plugin

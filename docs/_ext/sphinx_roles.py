@@ -15,7 +15,7 @@ from typing import Any
 import griffe
 
 ROLE = re.compile(r":(?:class|func|meth|data|mod|attr|exc|obj):`(?P<tilde>~?)(?P<target>[^`<>\s]+)`")
-PACKAGES = ("belief", "plugins")
+PACKAGES = ("belief", "belief_tracking")
 
 
 def _resolve(obj: griffe.Object, target: str) -> str | None:

@@ -18,7 +18,7 @@ holds log p(z_i | x^j), the log-likelihood of feature i for particle j under its
 template (C (10)).  Entries may be very negative or −inf; NaN and +inf are rejected.  Every
 weight is handled in the log domain with log-sum-exp, so likelihoods of e^−800 do not underflow
 to zero.  No NaN leaves this module: a feature whose weights are all zero within a target gets
-uniform weights with a :class:`~plugins.video_tracking.particles.DegenerateWeightsWarning`
+uniform weights with a :class:`~belief_tracking.particles.DegenerateWeightsWarning`
 (SPEC B.1, resampling).
 
 Choices where SPEC B.5 reconstructs a garbled formula: the spread uses the default reading
@@ -29,10 +29,10 @@ term of C (14), and each term is normalised over the target's particles before m
 form, with β = ρ[q_init, p_cur] weighing the initial template (SPEC B.5, variant A).
 
 :class:`AdaptiveWeighting` is C's method as a weighting strategy of the tracker
-(:mod:`plugins.video_tracking.weighting`): each frame it computes the confidences λ from the
+(:mod:`belief_tracking.weighting`): each frame it computes the confidences λ from the
 cues' scores and mixes the product and sum rules with each target's ρ_{t−1}.  The total
 similarity itself, the occlusion test and the template update run after the estimate, in
-:mod:`plugins.video_tracking.appearance`, which keeps ρ.
+:mod:`belief_tracking.appearance`, which keeps ρ.
 
 Examples
 --------
@@ -58,10 +58,10 @@ from typing import Optional, Union
 
 import numpy as np
 
-from plugins.video_tracking import checks
-from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.particles import DegenerateWeightsWarning, systematic
-from plugins.video_tracking.weighting import Evidence, Weighing
+from belief_tracking import checks
+from belief_tracking.errors import TrackingError
+from belief_tracking.particles import DegenerateWeightsWarning, systematic
+from belief_tracking.weighting import Evidence, Weighing
 
 __all__ = [
     "AdaptiveConfig",
@@ -267,7 +267,7 @@ class AdaptiveConfig:
     >>> AdaptiveConfig(keep=0)
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.TrackingError: AdaptiveConfig.keep must be a number in (0, 1], got 0
+    belief_tracking.errors.TrackingError: AdaptiveConfig.keep must be a number in (0, 1], got 0
     """
 
     keep: float = 0.6
@@ -318,7 +318,7 @@ def feature_spreads(
     n_targets : int
         τ.
     rng : numpy.random.Generator
-        Source of the resampling offsets: one :func:`~plugins.video_tracking.particles.systematic`
+        Source of the resampling offsets: one :func:`~belief_tracking.particles.systematic`
         draw per target and feature, targets outer, features inner.
     keep : float
         Fraction in (0, 1] of the resampled particles kept (C Table 2: 60 %).
@@ -564,7 +564,7 @@ def fuse_adaptive(
     domain (log-sum-exp), so log-likelihoods of −800 mix correctly.  A term that is 0 for every
     particle of a target carries no information there and is dropped (the other term gets
     weight 1); if both are, the target's weights are uniform, with a
-    :class:`~plugins.video_tracking.particles.DegenerateWeightsWarning`.
+    :class:`~belief_tracking.particles.DegenerateWeightsWarning`.
 
     ``mix_norm="raw"`` is the formula as printed, on the likelihoods as given: SPEC B.5 pairs
     it with likelihoods without their 1/(√(2π)σ) factor, i.e. log_p = −d²/(2σ²).
@@ -812,7 +812,7 @@ class AdaptiveWeighting:
 
     Examples
     --------
-    >>> from plugins.video_tracking.weighting import Evidence
+    >>> from belief_tracking.weighting import Evidence
     >>> scores = (np.log([[0.5, 0.1], [0.1, 0.1]]), np.log([[0.2, 0.1], [0.4, 0.1]]))
     >>> evidence = Evidence(scores, np.array([0, 0]), np.array([[0.0, 0.0], [2.0, 0.0]]))
     >>> weighing = AdaptiveWeighting(AdaptiveConfig(), ("colour", "edges"), np.random.default_rng(0)).weigh(evidence)

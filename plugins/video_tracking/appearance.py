@@ -19,8 +19,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from plugins.video_tracking.adaptive import AdaptiveConfig, occluded, total_similarity
-from plugins.video_tracking.cues import AppearanceCue, Observation
+from belief_tracking.adaptive import AdaptiveConfig, occluded, total_similarity
+from belief_tracking.cues import AppearanceCue, Observation
 
 __all__ = ["AppearanceFollower", "row_similarity"]
 
@@ -50,7 +50,7 @@ class AppearanceFollower:
     --------
     A target whose window shows exactly its template has ρ_t = 1 and is not occluded:
 
-    >>> from plugins.video_tracking.cues import ColourCue, ColourConfig, Observation
+    >>> from belief_tracking.cues import ColourCue, ColourConfig, Observation
     >>> image = np.full((60, 80, 3), 128, np.uint8)
     >>> cue = ColourCue(ColourConfig(samples=(6, 12)))
     >>> cue.set_templates(image, np.array([[30, 20, 10, 20]]))

@@ -17,8 +17,8 @@ import math
 
 import numpy as np
 
-from plugins.video_tracking.boxes import check_boxes, iou
-from plugins.video_tracking.errors import TrackingError
+from belief_tracking.boxes import check_boxes, iou
+from belief_tracking.errors import TrackingError
 
 __all__ = ["assign", "min_cost_assignment", "UNASSIGNED"]
 

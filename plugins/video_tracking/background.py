@@ -40,10 +40,12 @@ import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
-from plugins.video_tracking.errors import TrackingError
+from belief_tracking.errors import TrackingError
+from belief_tracking.extras import require
+
+cv2 = require("cv2")
 
 __all__ = ["BackgroundConfig", "BackgroundModel"]
 
@@ -134,7 +136,7 @@ class BackgroundConfig:
     >>> BackgroundConfig(max_foreground=0)
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.TrackingError: BackgroundConfig.max_foreground must lie in (0, 1], got 0
+    belief_tracking.errors.TrackingError: BackgroundConfig.max_foreground must lie in (0, 1], got 0
     """
 
     history: int = 100

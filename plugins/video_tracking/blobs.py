@@ -3,12 +3,12 @@
 The blobs of a foreground mask are rough boxes of people: two people who walk side by
 side make one blob, a shirt of the background's colour splits a person into a head and
 torso above and legs below, and a blob can reach far above a person (a group one behind
-the other) or be a shadow.  With a :class:`~plugins.video_tracking.perspective.PersonSize`,
+the other) or be a shadow.  With a :class:`~belief_tracking.perspective.PersonSize`,
 which says how large a person whose feet are on a given row is, :func:`person_boxes` turns
 the blobs into boxes of single people:
 
 1. **blobs**: the mask is cleaned by the opening of
-   :func:`~plugins.video_tracking.initiation.foreground_blobs` and split into 8-connected
+   :func:`~belief_tracking.initiation.foreground_blobs` and split into 8-connected
    components;
 2. **fragments**: two blobs whose union is no larger than one person at its foot row, and
    that each are only part of one, are merged (without a size model only a blob just
@@ -23,11 +23,11 @@ the blobs into boxes of single people:
    box then shrunk to its pixels.
 
 :func:`box_mask` gives the pixels under a set of boxes (the ``protect`` mask of
-:meth:`BackgroundModel.apply <plugins.video_tracking.background.BackgroundModel.apply>`),
+:meth:`BackgroundModel.apply <belief_tracking.background.BackgroundModel.apply>`),
 and :func:`fit_person_size` fits the size model on the blobs of several masks.
 
 Boxes are ``(x, y, w, h)`` in 0-based pixels, as in
-:mod:`~plugins.video_tracking.initiation`; OpenCV does the opening and the connected
+:mod:`~belief_tracking.initiation`; OpenCV does the opening and the connected
 components, the rest is NumPy.
 """
 
@@ -38,10 +38,11 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from plugins.video_tracking.boxes import check_boxes, pixel_ranges
-from plugins.video_tracking import checks
-from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.perspective import PersonSize
+from belief_tracking.boxes import check_boxes, pixel_ranges
+from belief_tracking import checks
+from belief_tracking.errors import TrackingError
+from belief_tracking.extras import require
+from belief_tracking.perspective import PersonSize
 
 __all__ = ["person_boxes", "box_mask", "fit_person_size"]
 
@@ -95,7 +96,7 @@ def person_boxes(mask: np.ndarray, size_model: PersonSize | None = None, *, min_
         of one person stacked one above the other merged.
     min_area_pixels : float
         Without a size model, blobs (or merges) with fewer pixels are dropped, as by
-        :func:`~plugins.video_tracking.initiation.foreground_blobs`.  With one, only blobs
+        :func:`~belief_tracking.initiation.foreground_blobs`.  With one, only blobs
         cut by the image border are held to it; the others are held to the size model.
     opening : int
         Side of the square kernel of the opening (0 or 1: none).
@@ -223,7 +224,7 @@ class _Blob:
 
 def _components(mask: np.ndarray, opening: int) -> tuple[np.ndarray, np.ndarray]:
     """The labels of the opened mask's 8-connected components and their stats (x, y, w, h, area)."""
-    import cv2  # the image-processing edge of the plugin: keep OpenCV out of the import path
+    cv2 = require("cv2")  # OpenCV stays at the edges: out of the import path
 
     image = mask.view(np.uint8)
     if opening >= 2:

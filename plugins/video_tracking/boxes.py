@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from plugins.video_tracking.errors import TrackingError
+from belief_tracking.errors import TrackingError
 
 __all__ = ["check_boxes", "iou", "intersections", "box_centres", "pixel_ranges"]
 
@@ -33,7 +33,7 @@ def check_boxes(boxes, what: str = "boxes", *, positive: bool = True, image_shap
     image_shape : (int, int), optional
         (H, W): every box must overlap the image.
     error : type
-        The :class:`~plugins.video_tracking.errors.TrackingError` subclass to raise.
+        The :class:`~belief_tracking.errors.TrackingError` subclass to raise.
 
     Returns
     -------
@@ -53,11 +53,11 @@ def check_boxes(boxes, what: str = "boxes", *, positive: bool = True, image_shap
     >>> check_boxes([[0, 0, 0, 5]], "track boxes")
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.TrackingError: track boxes: box 0 has width 0 and height 5; both must be positive
+    belief_tracking.errors.TrackingError: track boxes: box 0 has width 0 and height 5; both must be positive
     >>> check_boxes([[500, 10, 10, 10]], image_shape=(240, 320))
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.TrackingError: boxes: box 0 (x=500, y=10, w=10, h=10) lies outside the 320x240 image
+    belief_tracking.errors.TrackingError: boxes: box 0 (x=500, y=10, w=10, h=10) lies outside the 320x240 image
     """
     try:
         array = np.array(boxes, dtype=np.float64)

@@ -1,8 +1,8 @@
 """A frame's candidate boxes: where a person may be, from a detector or from the foreground.
 
 With a detector the candidates are its boxes and scores.  Without one they are the person
-boxes of the foreground mask (:func:`~plugins.video_tracking.blobs.person_boxes`): blobs
-merged, cut and split with a :class:`~plugins.video_tracking.perspective.PersonSize` that
+boxes of the foreground mask (:func:`~belief_tracking.blobs.person_boxes`): blobs
+merged, cut and split with a :class:`~belief_tracking.perspective.PersonSize` that
 :class:`BlobCandidates` fits on the blobs of the first frames and refits as more come in,
 so that the size model adapts to the video without a calibration step.
 """
@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from plugins.video_tracking.blobs import person_boxes
-from plugins.video_tracking.initiation import InitiationConfig
-from plugins.video_tracking.perspective import PersonSize
+from belief_tracking.blobs import person_boxes
+from belief_tracking.initiation import InitiationConfig
+from belief_tracking.perspective import PersonSize
 
 __all__ = ["BlobCandidates", "BLOB_SCORE"]
 

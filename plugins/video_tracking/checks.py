@@ -2,7 +2,7 @@
 
 Every settings dataclass of the plugin (``TrackerConfig``, ``ColourConfig``, ``MotionConfig``
 …) checks its fields once, in ``__post_init__``, with these helpers; the code behind trusts
-them.  A bad value raises :class:`~plugins.video_tracking.errors.TrackingError` (a
+them.  A bad value raises :class:`~belief_tracking.errors.TrackingError` (a
 :class:`belief.errors.BeliefError`), never a bare ``ValueError``, so the command line turns
 it into one line.
 
@@ -13,7 +13,7 @@ Examples
 >>> integer("TrackerConfig.particles", 0, minimum=1)
 Traceback (most recent call last):
 ...
-plugins.video_tracking.errors.TrackingError: TrackerConfig.particles must be an integer >= 1, got 0
+belief_tracking.errors.TrackingError: TrackerConfig.particles must be an integer >= 1, got 0
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from plugins.video_tracking.errors import TrackingError
+from belief_tracking.errors import TrackingError
 
 __all__ = ["number", "integer", "choice", "flag", "fraction", "instance", "image_shape"]
 

@@ -2,7 +2,7 @@
 
 ``belief track SOURCE --out DIR [options]`` tracks a video file, a folder of images, an
 image pattern (``img1/%06d.jpg``) or a MOTChallenge sequence folder
-(:func:`~plugins.video_tracking.sources.open_source`); ``--detections DET.txt`` adds a
+(:func:`~belief_tracking.sources.open_source`); ``--detections DET.txt`` adds a
 detector's boxes (a MOTChallenge detection file).  With no init file the tracks are
 started, lost, found again and ended automatically from the detections, or from the
 person blobs of the background model without them; ``--init BOXES``
@@ -11,11 +11,11 @@ gives the targets of the first frame (later entries are still found automaticall
 tracks against it.  ``belief track --demo --out DIR`` renders the synthetic demo scene,
 tracks it automatically (the ground truth is not given to the tracker) and prints the
 scores against its ground truth.  ``--set KEY=VALUE`` reaches every
-setting of :class:`~plugins.video_tracking.config.TrackerConfig`.
+setting of :class:`~belief_tracking.config.TrackerConfig`.
 
 ``belief eval TRACKS.txt GT.txt`` scores tracks; ``belief experiment GRID.toml`` runs a
 grid of seeded runs.  Every value is checked here or in the settings dataclasses; bad
-input raises a :class:`~plugins.video_tracking.errors.TrackingError`, which the ``belief``
+input raises a :class:`~belief_tracking.errors.TrackingError`, which the ``belief``
 command line reports in one line with exit status 1.
 """
 
@@ -25,6 +25,7 @@ import argparse
 import json
 from pathlib import Path
 from typing import Any
+from belief_tracking.extras import require
 
 __all__ = ["register", "register_eval", "register_experiment", "AUTOMATIC_WARM_UP", "parse_setting"]
 
@@ -66,12 +67,12 @@ def parse_setting(text: str) -> tuple[list[str], Any]:
     >>> parse_setting("cues=['colour', 'edges']")
     (['cues'], ['colour', 'edges'])
     """
-    from plugins.video_tracking.errors import TrackingError
+    from belief_tracking.errors import TrackingError
 
     try:
         import tomllib
     except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-        import tomli as tomllib
+        tomllib = require("tomli")
 
     key, separator, value = text.partition("=")
     path = [part.strip() for part in key.split(".")]
@@ -86,7 +87,7 @@ def parse_setting(text: str) -> tuple[list[str], Any]:
 
 def _settings(args: argparse.Namespace) -> dict[str, Any]:
     """The TrackerConfig settings of the command line: ``--set`` values, then the dedicated flags."""
-    from plugins.video_tracking.errors import TrackingError
+    from belief_tracking.errors import TrackingError
 
     options: dict[str, Any] = {}
     for text in args.set or ():
@@ -119,7 +120,7 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _detections(args: argparse.Namespace, frame_count: int | None, width: int, height: int):
-    from plugins.video_tracking.detections import read_detections
+    from belief_tracking.detections import read_detections
 
     if args.detections is None:
         return None
@@ -127,12 +128,12 @@ def _detections(args: argparse.Namespace, frame_count: int | None, width: int, h
 
 
 def _cmd_track(args: argparse.Namespace) -> int:
-    from plugins.video_tracking import scenes
-    from plugins.video_tracking.config import TrackerConfig
-    from plugins.video_tracking.errors import TrackingError
-    from plugins.video_tracking.initiation import init_from_gt, read_init_boxes
-    from plugins.video_tracking.runner import run
-    from plugins.video_tracking.sources import open_source
+    from belief_tracking import scenes
+    from belief_tracking.config import TrackerConfig
+    from belief_tracking.errors import TrackingError
+    from belief_tracking.initiation import init_from_gt, read_init_boxes
+    from belief_tracking.runner import run
+    from belief_tracking.sources import open_source
 
     config = TrackerConfig.from_settings(_settings(args), "belief track")
     progress = not args.no_progress
@@ -254,8 +255,8 @@ def register(subparsers: Any) -> None:
 
 # -- belief eval -----------------------------------------------------------------------------------
 def _cmd_eval(args: argparse.Namespace) -> int:
-    from plugins.video_tracking.evaluation import evaluate
-    from plugins.video_tracking.motfiles import read_mot
+    from belief_tracking.evaluation import evaluate
+    from belief_tracking.motfiles import read_mot
 
     # A run that found nobody writes an empty tracks.txt: it scores as missing every box.
     tracks = read_mot(args.tracks, allow_empty=True)
@@ -272,9 +273,9 @@ def register_eval(subparsers: Any) -> None:
     """Add the ``eval`` subcommand to a ``belief`` sub-parser collection.
 
     ``belief eval TRACKS.txt GT.txt [--json]`` prints the
-    :class:`~plugins.video_tracking.evaluation.Scores` of the tracks against the ground
+    :class:`~belief_tracking.evaluation.Scores` of the tracks against the ground
     truth, as a table or as JSON.  Bad files raise
-    :class:`~plugins.video_tracking.errors.TrackFileError`, which the ``belief`` command
+    :class:`~belief_tracking.errors.TrackFileError`, which the ``belief`` command
     line reports in one line.
 
     Examples
@@ -300,9 +301,9 @@ def register_eval(subparsers: Any) -> None:
 
 # -- belief experiment -----------------------------------------------------------------------------
 def _cmd_experiment(args: argparse.Namespace) -> int:
-    from plugins.video_tracking.experiment import load_experiment
-    from plugins.video_tracking.grid import run_experiment
-    from plugins.video_tracking.tables import format_summary
+    from belief_tracking.experiment import load_experiment
+    from belief_tracking.grid import run_experiment
+    from belief_tracking.tables import format_summary
 
     experiment = load_experiment(args.config, data_dir=args.data)
     out = Path(args.out) if args.out is not None else Path(args.config).with_suffix("")

@@ -1,11 +1,11 @@
 """The tracker's settings, :class:`TrackerConfig`, checked once when they are made.
 
 Each part of the tracker has its own frozen settings dataclass, defined and given its
-defaults next to the part (``ColourConfig`` in :mod:`~plugins.video_tracking.cues`,
-``MotionConfig`` in :mod:`~plugins.video_tracking.particles`, …); :class:`TrackerConfig`
+defaults next to the part (``ColourConfig`` in :mod:`~belief_tracking.cues`,
+``MotionConfig`` in :mod:`~belief_tracking.particles`, …); :class:`TrackerConfig`
 gathers them with the choices that assemble the parts (which cues, which weighting
 strategy, which rule).  Every field is checked in ``__post_init__`` and raises
-:class:`~plugins.video_tracking.errors.TrackingError` naming the field; the tracker trusts
+:class:`~belief_tracking.errors.TrackingError` naming the field; the tracker trusts
 the settings after that.
 """
 
@@ -17,15 +17,15 @@ from typing import Any
 
 from belief.rules import get_rule
 from belief.errors import BeliefError
-from plugins.video_tracking import checks
-from plugins.video_tracking.adaptive import AdaptiveConfig
-from plugins.video_tracking.background import BackgroundConfig
-from plugins.video_tracking.cues import CUES, ColourConfig, DetectionConfig, EdgeConfig, LocationConfig
-from plugins.video_tracking.errors import TrackingError, UnknownCueError
-from plugins.video_tracking.fusion import MASSES, WEIGHTS, FusionConfig
-from plugins.video_tracking.initiation import InitiationConfig
-from plugins.video_tracking.particles import RESAMPLERS, MotionConfig
-from plugins.video_tracking.weighting import WEIGHTINGS
+from belief_tracking import checks
+from belief_tracking.adaptive import AdaptiveConfig
+from belief_tracking.background import BackgroundConfig
+from belief_tracking.cues import CUES, ColourConfig, DetectionConfig, EdgeConfig, LocationConfig
+from belief_tracking.errors import TrackingError, UnknownCueError
+from belief_tracking.fusion import MASSES, WEIGHTS, FusionConfig
+from belief_tracking.initiation import InitiationConfig
+from belief_tracking.particles import RESAMPLERS, MotionConfig
+from belief_tracking.weighting import WEIGHTINGS
 
 __all__ = ["TrackerConfig", "KAPPAS", "DIAGNOSTICS"]
 
@@ -45,10 +45,10 @@ class TrackerConfig:
     particles : int
         N, particles per target (the maximum when ``adaptive_particles`` is on).
     cues : tuple of str
-        Cue names of :data:`plugins.video_tracking.cues.CUES`, in fusion order: the
+        Cue names of :data:`belief_tracking.cues.CUES`, in fusion order: the
         R-weighted rule folds the cues in this order (SPEC Part D), so it is recorded.
     fusion : {"belief", "adaptive", "sum", "product"}
-        The weighting strategy of :data:`plugins.video_tracking.weighting.WEIGHTINGS`:
+        The weighting strategy of :data:`belief_tracking.weighting.WEIGHTINGS`:
         ``"belief"`` fuses the cues' mass functions with ``rule`` and weighs a particle of
         target J by ``weight`` of θ_J (W (7), W (32)); ``"adaptive"`` is C's
         confidence-weighted mix of the product and sum rules (C (11)–(14)), with the
@@ -63,13 +63,13 @@ class TrackerConfig:
         the conflict of a target with FA kept on θ_j ∪ FA).
     masses : {"relative", "normalised"}
         How a cue's likelihoods become its mass function
-        (:func:`~plugins.video_tracking.fusion.cue_masses`): ``"relative"`` divides each by
+        (:func:`~belief_tracking.fusion.cue_masses`): ``"relative"`` divides each by
         the best own-target likelihood of the particle's set and gives the unclaimed support
         to FA; ``"normalised"`` is W (20)–(21) as printed.
     motion : MotionConfig
         Noise of the constant-velocity model (W-S2).
     resampling : str
-        A resampler of :data:`plugins.video_tracking.particles.RESAMPLERS`.
+        A resampler of :data:`belief_tracking.particles.RESAMPLERS`.
     ess_threshold : float in [0, 1]
         Resample when N_eff < threshold·N; 1 resamples every frame (the papers' choice).
     adaptive_fusion : AdaptiveConfig
@@ -100,7 +100,7 @@ class TrackerConfig:
         people in view at the first frame are part of the first background.
     initiation : InitiationConfig or None
         Start tracks on foreground blobs entering at the image border and end tracks that
-        leave or lose their foreground (SPEC B.4, :mod:`plugins.video_tracking.initiation`);
+        leave or lose their foreground (SPEC B.4, :mod:`belief_tracking.initiation`);
         None tracks exactly the targets of the init plan.
     init_sigma : float
         Spread in pixels of a newborn target's particles around its box centre (W-S1).
@@ -125,7 +125,7 @@ class TrackerConfig:
     >>> TrackerConfig(cues=("colour", "sound"))
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.UnknownCueError: unknown cue 'sound'; known cues: colour, location, foreground, edges, detections
+    belief_tracking.errors.UnknownCueError: unknown cue 'sound'; known cues: colour, location, foreground, edges, detections
     """
 
     particles: int = 100
@@ -213,7 +213,7 @@ class TrackerConfig:
         >>> TrackerConfig.from_settings({"particle": 40})  # doctest: +ELLIPSIS
         Traceback (most recent call last):
         ...
-        plugins.video_tracking.errors.TrackingError: settings: unknown key 'particle'; known keys: particles, cues, ...
+        belief_tracking.errors.TrackingError: settings: unknown key 'particle'; known keys: particles, cues, ...
         """
         if not isinstance(settings, Mapping):
             raise TrackingError(f"{where} must be a table of TrackerConfig settings, got {settings!r}")
@@ -237,7 +237,7 @@ class TrackerConfig:
             raise TrackingError(f"{where}: {exc}") from None
 
     def fusion_config(self) -> FusionConfig:
-        """The :class:`~plugins.video_tracking.fusion.FusionConfig` of these settings."""
+        """The :class:`~belief_tracking.fusion.FusionConfig` of these settings."""
         return FusionConfig(rule=self.rule, weight=self.weight, r_mode=self.r_mode, empty_mode=self.empty_mode,
                             masses=self.masses)
 

@@ -2,7 +2,7 @@
 
 Every cue scores all particles of all targets at once against every hypothesis of the frame
 {θ_1, …, θ_τ, FA} and returns *log*-likelihoods of shape ``(P, τ + 1)``, the last column
-being the false alarm FA.  :class:`plugins.video_tracking.fusion.CueFusion` turns each row
+being the false alarm FA.  :class:`belief_tracking.fusion.CueFusion` turns each row
 into a Bayesian mass function (W (20)–(21)) and combines the cues.
 
 Four cues are provided, all registered in :data:`CUES` (see :func:`make_cue`):
@@ -18,7 +18,7 @@ Four cues are provided, all registered in :data:`CUES` (see :func:`make_cue`):
 Pixel geometry
 --------------
 Pixel (column i, row j) covers the square [i, i+1) × [j, j+1).  A box ``(x, y, w, h)`` in
-0-based pixel coordinates therefore has centre ``(x + w/2, y + h/2)`` (:func:`~plugins.video_tracking.boxes.box_centres`)
+0-based pixel coordinates therefore has centre ``(x + w/2, y + h/2)`` (:func:`~belief_tracking.boxes.box_centres`)
 and half-sizes ``(w/2, h/2)``, and a point ``(px, py)`` falls in pixel ``(⌊px⌋, ⌊py⌋)``.
 The box of particle p has size ``sizes[owner[p]] * exp(log_scale[p])``.
 
@@ -38,10 +38,10 @@ from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
-from plugins.video_tracking import checks
-from plugins.video_tracking.boxes import box_centres, check_boxes
-from plugins.video_tracking.detections import check_rows
-from plugins.video_tracking.errors import TrackingError, UnknownCueError
+from belief_tracking import checks
+from belief_tracking.boxes import box_centres, check_boxes
+from belief_tracking.detections import check_rows
+from belief_tracking.errors import TrackingError, UnknownCueError
 
 __all__ = [
     "Observation",
@@ -108,7 +108,7 @@ class Observation:
         None when the run has no detector, (0, 5) when it found nobody in this frame).
     assigned : ndarray of int, shape (τ,), or None
         The detection each target took in this frame's one-to-one assignment
-        (:func:`~plugins.video_tracking.association.assign`), −1 for none.
+        (:func:`~belief_tracking.association.assign`), −1 for none.
 
     Examples
     --------
@@ -1033,7 +1033,7 @@ class ColourCue:
     def follow_appearance(self, observed: np.ndarray, frozen: np.ndarray) -> None:
         """Let every template follow its target's current appearance, frozen under occlusion (C (16)).
 
-        The formula is :func:`plugins.video_tracking.adaptive.update_templates`; the initial
+        The formula is :func:`belief_tracking.adaptive.update_templates`; the initial
         templates anchor it.
 
         Parameters
@@ -1051,7 +1051,7 @@ class ColourCue:
         >>> cue.templates.tolist()
         [[1.0]]
         """
-        from plugins.video_tracking.adaptive import update_templates
+        from belief_tracking.adaptive import update_templates
 
         updated = update_templates(self._initial, self._templates, observed, frozen)
         totals = updated.sum(axis=1, keepdims=True)
@@ -1439,7 +1439,7 @@ def make_cue(name: str, **options) -> Cue:
     >>> make_cue("sound")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.UnknownCueError: unknown cue 'sound'; known cues: colour, location, foreground, ...
+    belief_tracking.errors.UnknownCueError: unknown cue 'sound'; known cues: colour, location, foreground, ...
     """
     cue_type = CUES.get(name) if isinstance(name, str) else None
     if cue_type is None:

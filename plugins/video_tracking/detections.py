@@ -13,7 +13,7 @@ from os import PathLike
 
 import numpy as np
 
-from plugins.video_tracking.errors import DetectionFileError, TrackingError
+from belief_tracking.errors import DetectionFileError, TrackingError
 
 __all__ = ["Detections", "DETECTION_COLUMNS", "read_detections", "write_detections", "check_detections",
            "check_rows"]
@@ -83,7 +83,7 @@ def check_rows(rows, where: str) -> np.ndarray:
     >>> check_rows([[1, 2, 3, 4, 1.5]], "frame 1")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.TrackingError: frame 1: detections must be finite rows x, y, w, h, score ...
+    belief_tracking.errors.TrackingError: frame 1: detections must be finite rows x, y, w, h, score ...
     """
     array = np.asarray(rows, dtype=np.float64)
     if array.ndim != 2 or array.shape[1] != len(DETECTION_COLUMNS) or not np.isfinite(array).all() \
@@ -145,10 +145,10 @@ def read_detections(path: str | PathLike[str], *, frame_count: int | None = None
     >>> read_detections(path)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.DetectionFileError: .../det.txt, line 1: the score 1.5 is outside [0, 1] ...
+    belief_tracking.errors.DetectionFileError: .../det.txt, line 1: the score 1.5 is outside [0, 1] ...
     """
     from belief.textfiles import read_text
-    from plugins.video_tracking.motfiles import text_lines
+    from belief_tracking.motfiles import text_lines
 
     name = str(path)
     text = read_text(path, "detection file", DetectionFileError, encoding="utf-8-sig")
@@ -248,7 +248,7 @@ def check_detections(detections: Detections, *, frame_count: int | None = None,
     >>> check_detections(dets, frame_count=3)
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.DetectionFileError: det.txt: frame 4 is after the end of the video (3 frames)
+    belief_tracking.errors.DetectionFileError: det.txt: frame 4 is after the end of the video (3 frames)
     """
     if not isinstance(detections, Detections):
         raise TrackingError(f"detections must be Detections or None, got {type(detections).__name__}")

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 from belief.errors import BeliefError
 
-__all__ = ["TrackingError", "TrackFileError", "DetectionFileError", "UnknownCueError", "VideoError", "InitError"]
+__all__ = ["TrackingError", "TrackFileError", "DetectionFileError", "UnknownCueError", "VideoError", "InitError",
+           "MissingExtraError"]
 
 
 class TrackingError(BeliefError, ValueError):
@@ -34,3 +35,7 @@ class VideoError(TrackingError):
 
 class InitError(TrackingError):
     """Target initialisation is unusable: an empty or malformed init file, or a box outside the image."""
+
+
+class MissingExtraError(BeliefError, ModuleNotFoundError):
+    """A package of the plugin's ``tracking`` extra is not installed; the message says how to install it."""

@@ -1,7 +1,7 @@
 """Scoring tracks against ground truth: CLEAR MOT (MOTA, MOTP), IDF1 and centre errors.
 
 Tracks and ground truth are MOTChallenge rows (read by
-:func:`~plugins.video_tracking.motfiles.read_mot`): one box per row,
+:func:`~belief_tracking.motfiles.read_mot`): one box per row,
 ``frame,id,x,y,w,h,flag,...`` with the box's top-left corner ``(x, y)`` and size ``(w, h)``
 in pixels.  :func:`evaluate` follows the usual MOTChallenge protocol:
 
@@ -30,8 +30,9 @@ from typing import Any
 
 import numpy as np
 
-from plugins.video_tracking.boxes import check_boxes, iou
-from plugins.video_tracking.errors import TrackingError
+from belief_tracking.boxes import check_boxes, iou
+from belief_tracking.errors import TrackingError
+from belief_tracking.extras import require
 
 __all__ = [
     "Scores",
@@ -261,7 +262,7 @@ def _centres(table: np.ndarray) -> np.ndarray:
 def _accumulate(gt: Any, hyp: Any, max_iou_distance: float):
     """The motmetrics accumulator of :func:`evaluate`, the sorted rows, and the dropped hypotheses."""
     try:
-        import motmetrics
+        motmetrics = require("motmetrics")
         from motmetrics.lap import linear_sum_assignment
     except ImportError as exc:  # pragma: no cover - motmetrics is a dependency
         raise TrackingError(f"evaluation needs the motmetrics package ({exc})") from None
@@ -362,7 +363,7 @@ def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
     ----------
     gt : array_like, shape (N, 6..10)
         Ground-truth rows ``frame, id, x, y, w, h[, flag, ...]`` as read by
-        :func:`~plugins.video_tracking.motfiles.read_mot`.  Rows whose flag is 0 are not
+        :func:`~belief_tracking.motfiles.read_mot`.  Rows whose flag is 0 are not
         scored; without a flag column, every row is.
     hyp : array_like, shape (M, 6..10)
         Tracker rows, same layout; the 7th column (a confidence) is not used.  May be
@@ -409,7 +410,7 @@ def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
     (0.0, 0.0, 3, 0)
     """
     accumulator, gt_rows, hyp_rows, ignored_predictions = _accumulate(gt, hyp, max_iou_distance)
-    import motmetrics
+    motmetrics = require("motmetrics")
 
     names = ["mota", "motp", "idf1", "precision", "recall", "num_switches", "num_false_positives",
              "num_misses", "num_detections", "num_objects", "num_predictions", "num_frames"]

@@ -15,7 +15,7 @@ import os
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any, TypeVar
 
-from plugins.video_tracking.errors import TrackingError
+from belief_tracking.errors import TrackingError
 
 __all__ = ["outcomes", "executor"]
 

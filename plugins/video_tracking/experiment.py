@@ -2,16 +2,16 @@
 
 An experiment crosses *sequences* (synthetic scenes or recorded videos with ground truth),
 *methods* (a combination rule, a fusion strategy, a cue set, or any other
-:class:`~plugins.video_tracking.config.TrackerConfig` settings) and *seeds*.  Every
+:class:`~belief_tracking.config.TrackerConfig` settings) and *seeds*.  Every
 combination is a :class:`Cell`: one tracking run, scored against the ground truth
-(:func:`plugins.video_tracking.runs.run_cell`).  :func:`plugins.video_tracking.grid.run_experiment`
+(:func:`belief_tracking.runs.run_cell`).  :func:`belief_tracking.grid.run_experiment`
 runs the cells in parallel on local processes or a Dask cluster, resumably, and writes the
 tables (``belief experiment CONFIG`` on the command line).
 
 The outputs, in ``OUT/``, are ``results.csv`` (one row per cell), ``rms.csv`` (the RMS
 position error of every target at every frame over the seeds, W (36)) and ``summary.csv``
 (mean and standard deviation over the seeds), described column by column in
-:mod:`plugins.video_tracking.tables`, and ``experiment.json`` (the grid as it was resolved:
+:mod:`belief_tracking.tables`, and ``experiment.json`` (the grid as it was resolved:
 absolute paths, every setting).
 
 The configuration is a TOML file::
@@ -24,7 +24,7 @@ The configuration is a TOML file::
 
     [[sequences]]
     name = "crossing"
-    scene = "crossing"                  # a synthetic scene of plugins.video_tracking.scenes
+    scene = "crossing"                  # a synthetic scene of belief_tracking.scenes
 
     [[sequences]]
     name = "pets"
@@ -55,7 +55,7 @@ nested settings, e.g. ``[tracker.motion]`` ``sigma_pos = 2.0``.
 Examples
 --------
 >>> import tempfile
->>> from plugins.video_tracking.grid import run_experiment
+>>> from belief_tracking.grid import run_experiment
 >>> experiment = experiment_from_mapping({
 ...     "seeds": [0, 1],
 ...     "tracker": {"particles": 20},
@@ -87,7 +87,8 @@ from typing import Any
 
 import numpy as np
 
-from plugins.video_tracking.errors import TrackingError
+from belief_tracking.errors import TrackingError
+from belief_tracking.extras import require
 
 __all__ = [
     "ExperimentError",
@@ -129,7 +130,7 @@ class SequenceSpec:
     name : str
         The label in the tables.
     scene : str or None
-        A preset of :data:`plugins.video_tracking.scenes.PRESETS` (rendered on the worker).
+        A preset of :data:`belief_tracking.scenes.PRESETS` (rendered on the worker).
     scene_seed : int
         Seed of the scene's rendering (its noise), the same for every run.
     frames : int or None
@@ -142,7 +143,7 @@ class SequenceSpec:
         their own (SPEC B.4) after a background warm-up of 50 frames.
     detections : str or None
         Path of a MOTChallenge detection file (``det.txt``, absolute once loaded), read with
-        :func:`~plugins.video_tracking.detections.read_detections` against the whole
+        :func:`~belief_tracking.detections.read_detections` against the whole
         sequence's length and frame size (:meth:`load_detections`).  Every method that
         tracks the sequence is given the boxes, as ``belief track --detections`` does: they
         start, support and correct the tracks, and a method whose cues include
@@ -159,7 +160,7 @@ class SequenceSpec:
     detections: str | None = None
 
     def __post_init__(self) -> None:
-        from plugins.video_tracking import scenes
+        from belief_tracking import scenes
 
         if not isinstance(self.name, str) or not self.name.strip():
             raise ExperimentError(f"a sequence needs a non-empty name, got {self.name!r}")
@@ -183,7 +184,7 @@ class SequenceSpec:
 
     def load(self) -> tuple[Any, np.ndarray]:
         """The frames to track (a rendered scene or a video path) and the ground-truth rows."""
-        from plugins.video_tracking.motfiles import read_mot
+        from belief_tracking.motfiles import read_mot
 
         if self.scene is not None:
             scene = _rendered(self.scene, self.scene_seed, self.frames)
@@ -192,7 +193,7 @@ class SequenceSpec:
             frames, gt = self.video, read_mot(self.gt)
         if self.frames is not None:
             if self.scene is None:
-                from plugins.video_tracking.video import VideoReader
+                from belief_tracking.video import VideoReader
 
                 with contextlib.closing(VideoReader(self.video)) as reader:
                     frames = np.stack([image for _, image in zip(range(self.frames), reader)])
@@ -214,20 +215,20 @@ class SequenceSpec:
         ------
         TrackingError
             The file is missing or unreadable, or a line is malformed, after the last frame
-            or wholly outside the image (:func:`~plugins.video_tracking.detections.read_detections`;
+            or wholly outside the image (:func:`~belief_tracking.detections.read_detections`;
             the message names the file).
         """
-        from plugins.video_tracking.detections import read_detections
+        from belief_tracking.detections import read_detections
 
         if self.detections is None:
             return None
         if self.scene is not None:
-            from plugins.video_tracking import scenes
+            from belief_tracking import scenes
 
             config = scenes.PRESETS[self.scene](self.scene_seed)
             frame_count, size = config.n_frames, (config.width, config.height)
         else:
-            from plugins.video_tracking.video import VideoReader
+            from belief_tracking.video import VideoReader
 
             with contextlib.closing(VideoReader(self.video)) as reader:
                 frame_count, size = reader.frame_count, (reader.width, reader.height)
@@ -252,7 +253,7 @@ def _rendered(name: str, seed: int, frames: int | None):
     A scene cut to its first frames is rendered to that length only: a shorter scene begins
     with exactly the frames of a longer one.
     """
-    from plugins.video_tracking import scenes
+    from belief_tracking import scenes
 
     config = scenes.PRESETS[name](seed)
     if frames is not None and frames < config.n_frames:
@@ -264,7 +265,7 @@ def _rendered(name: str, seed: int, frames: int | None):
 
 @dataclass(frozen=True)
 class MethodSpec:
-    """One tracking method: :class:`~plugins.video_tracking.config.TrackerConfig` settings.
+    """One tracking method: :class:`~belief_tracking.config.TrackerConfig` settings.
 
     Attributes
     ----------
@@ -326,7 +327,7 @@ class Cell:
         return settings
 
     def config(self):
-        """The :class:`~plugins.video_tracking.config.TrackerConfig` of this cell."""
+        """The :class:`~belief_tracking.config.TrackerConfig` of this cell."""
         return _tracker_config(self.settings(), f"method {self.method.name!r}")
 
     @property
@@ -409,7 +410,7 @@ def load_experiment(path: str | os.PathLike[str], data_dir: str | os.PathLike[st
     try:
         import tomllib
     except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-        import tomli as tomllib
+        tomllib = require("tomli")
 
     path = Path(path)
     try:
@@ -559,7 +560,7 @@ def _check_keys(mapping: Mapping[str, Any], known: Sequence[str], where: str) ->
 
 
 def _check_tracker_keys(options: Mapping[str, Any], where: str) -> None:
-    from plugins.video_tracking.config import TrackerConfig
+    from belief_tracking.config import TrackerConfig
 
     known = [f.name for f in fields(TrackerConfig)]
     _check_keys(options, known, f"{where} (TrackerConfig settings)")
@@ -593,7 +594,7 @@ def _thaw(options: tuple[tuple[str, Any], ...]) -> dict[str, Any]:
 
 def _tracker_config(settings: Mapping[str, Any], where: str):
     """Build a TrackerConfig; nested tables fill the nested settings dataclasses."""
-    from plugins.video_tracking.config import TrackerConfig
+    from belief_tracking.config import TrackerConfig
 
     try:
         return TrackerConfig.from_settings(settings, where)

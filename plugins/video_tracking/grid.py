@@ -1,11 +1,11 @@
 """Running an experiment's grid, resumably, and writing its tables (``belief experiment CONFIG``).
 
 :func:`run_experiment` runs every cell of an
-:class:`~plugins.video_tracking.experiment.Experiment` that is not finished yet
-(:func:`~plugins.video_tracking.runs.run_cell`, in parallel through
-:mod:`~plugins.video_tracking.executors`), saves each finished cell at once under
+:class:`~belief_tracking.experiment.Experiment` that is not finished yet
+(:func:`~belief_tracking.runs.run_cell`, in parallel through
+:mod:`~belief_tracking.executors`), saves each finished cell at once under
 ``OUT/cells/`` (so an interrupted grid resumes where it stopped, and a failed cell is retried
-alone), and writes the tables of :mod:`~plugins.video_tracking.tables`.
+alone), and writes the tables of :mod:`~belief_tracking.tables`.
 """
 
 from __future__ import annotations
@@ -19,11 +19,12 @@ from typing import Any
 
 import numpy as np
 
-from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.executors import outcomes
-from plugins.video_tracking.experiment import CELL_FORMAT, Experiment, ExperimentError
-from plugins.video_tracking.runs import run_cell
-from plugins.video_tracking.tables import (
+from belief_tracking.errors import TrackingError
+from belief_tracking.executors import outcomes
+from belief_tracking.experiment import CELL_FORMAT, Experiment, ExperimentError
+from belief_tracking.extras import require
+from belief_tracking.runs import run_cell
+from belief_tracking.tables import (
     RESULT_COLUMNS,
     RMS_COLUMNS,
     rms_per_frame,
@@ -49,7 +50,7 @@ class ExperimentResult:
     summary : list of dict
         The rows of ``summary.csv``.
     cells : dict of str to dict
-        Every cell's full record by key (see :func:`~plugins.video_tracking.runs.run_cell`),
+        Every cell's full record by key (see :func:`~belief_tracking.runs.run_cell`),
         for figures.
     computed, reused : int
         Cells run now, and cells found finished in the output folder.
@@ -98,7 +99,7 @@ def run_experiment(experiment: Experiment, out_dir: str | os.PathLike[str], *, w
         Some cells failed: the message names them; the finished ones are kept, and running
         the experiment again retries the others only.
     """
-    from tqdm import tqdm
+    tqdm = require("tqdm").tqdm
 
     if not isinstance(experiment, Experiment):
         raise ExperimentError(f"experiment must be an Experiment, got {type(experiment).__name__}")

@@ -6,7 +6,7 @@ boxes (:func:`read_init_boxes`) or from boxes in code (:func:`init_from_boxes`).
 
 Without a plan, or for the people who enter later, the tracks start, are lost, are found
 again and end on their own (L §1.2 modules 2, 3 and 5), by the rules of
-:class:`InitiationConfig` that :class:`~plugins.video_tracking.lifecycle.Lifecycle` applies
+:class:`InitiationConfig` that :class:`~belief_tracking.lifecycle.Lifecycle` applies
 to each frame's candidate boxes: a detector's, or the person blobs of the foreground mask.
 L starts a target for every foreground blob of the first frame (module 2) and watches the
 image border for people who come in or go out (modules 3 and 5); people also appear from
@@ -20,7 +20,7 @@ square kernel (3 × 3 by default), dropping those smaller than ``min_area · W �
 foreground.
 
 Boxes are ``(x, y, w, h)`` in 0-based pixels, with ``(x, y)`` the top-left corner, as in
-:mod:`plugins.video_tracking.cues`: pixel (column i, row j) covers [i, i+1) × [j, j+1), and
+:mod:`belief_tracking.cues`: pixel (column i, row j) covers [i, i+1) × [j, j+1), and
 a pixel belongs to a box when its centre (i + ½, j + ½) does.  OpenCV does the opening and
 the connected components; everything else is NumPy.
 """
@@ -35,10 +35,11 @@ from os import PathLike
 import numpy as np
 
 from belief.textfiles import read_text
-from plugins.video_tracking import checks
-from plugins.video_tracking.boxes import check_boxes, pixel_ranges
-from plugins.video_tracking.errors import InitError, TrackingError
-from plugins.video_tracking.motfiles import read_mot
+from belief_tracking import checks
+from belief_tracking.boxes import check_boxes, pixel_ranges
+from belief_tracking.errors import InitError, TrackingError
+from belief_tracking.extras import require
+from belief_tracking.motfiles import read_mot
 
 __all__ = [
     "TargetInit",
@@ -142,7 +143,7 @@ def init_from_gt(gt: str | PathLike[str] | np.ndarray, source: str | None = None
     Parameters
     ----------
     gt : path or ndarray, shape (M, ≥6)
-        A file for :func:`~plugins.video_tracking.motfiles.read_mot`, or its rows
+        A file for :func:`~belief_tracking.motfiles.read_mot`, or its rows
         ``frame, id, x, y, w, h, ...`` (1-based frames and corners).
     source : str, optional
         How messages name the plan (default: the path, or "ground truth").
@@ -324,7 +325,7 @@ class InitiationConfig:
     >>> InitiationConfig(appear_frames=0)
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.TrackingError: InitiationConfig.appear_frames must be an integer >= 1, got 0
+    belief_tracking.errors.TrackingError: InitiationConfig.appear_frames must be an integer >= 1, got 0
     """
 
     border: int = 10
@@ -433,7 +434,7 @@ def foreground_blobs(mask: np.ndarray, min_area_pixels: float, opening: int = 3)
     >>> foreground_blobs(mask, min_area_pixels=1, opening=3).tolist()  # the opening removes the pair
     [[1.0, 1.0, 3.0, 3.0]]
     """
-    import cv2  # the image-processing edge of the plugin: keep OpenCV out of the import path
+    cv2 = require("cv2")  # OpenCV stays at the edges: out of the import path
 
     mask = _checked_mask(mask)
     if isinstance(min_area_pixels, bool) or not isinstance(min_area_pixels, (int, float, np.integer, np.floating)) \

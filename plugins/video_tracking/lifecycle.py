@@ -2,7 +2,7 @@
 
 A frame's *candidates* are a detector's boxes, or the person blobs of the foreground mask
 when there is no detector.  Before the cues score the particles, every track takes at most
-one candidate (:func:`~plugins.video_tracking.association.assign`); :class:`Lifecycle`
+one candidate (:func:`~belief_tracking.association.assign`); :class:`Lifecycle`
 then reads the outcome:
 
 * A track that took a candidate is *supported*; so is a track whose window still looks
@@ -20,7 +20,7 @@ then reads the outcome:
   On the first frame every free candidate is born at once (``first_frame``).
 
 Taking back a lost id by appearance needs the cues' templates, which the
-:class:`~plugins.video_tracking.tracks.TrackManager` holds; :class:`Lifecycle` only keeps
+:class:`~belief_tracking.tracks.TrackManager` holds; :class:`Lifecycle` only keeps
 the counters and the chains.
 """
 
@@ -30,9 +30,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from plugins.video_tracking.association import UNASSIGNED
-from plugins.video_tracking.boxes import box_centres, intersections, iou
-from plugins.video_tracking.initiation import COVERED_FRACTION, InitiationConfig, foreground_fraction
+from belief_tracking.association import UNASSIGNED
+from belief_tracking.boxes import box_centres, intersections, iou
+from belief_tracking.initiation import COVERED_FRACTION, InitiationConfig, foreground_fraction
 
 __all__ = ["Lifecycle", "FrameOutcome", "DUPLICATE_INSIDE"]
 

@@ -15,7 +15,7 @@ from os import PathLike
 import numpy as np
 
 from belief.textfiles import read_text
-from plugins.video_tracking.errors import TrackFileError
+from belief_tracking.errors import TrackFileError
 
 __all__ = ["MOT_COLUMNS", "read_mot", "write_tracks", "text_lines"]
 

@@ -2,7 +2,7 @@
 
 * ``tracks.txt`` — MOTChallenge CSV ``frame,id,x,y,w,h,-1,-1,-1,-1`` (1-based frame and corner);
 * ``diagnostics.csv`` — per frame and target, the means of W (33)–(35) and more
-  (:func:`plugins.video_tracking.tracker.diagnostic_columns`);
+  (:func:`belief_tracking.tracker.diagnostic_columns`);
 * ``summary.json`` — frames, speed, parameters, seed, version and scores;
 * ``diagnostics.png`` — the curves of W's Fig. 10, one line per target.
 
@@ -26,7 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from plugins.video_tracking.errors import TrackingError
+from belief_tracking.errors import TrackingError
+from belief_tracking.extras import require
 
 __all__ = ["StagedOutputs", "RUN_OUTPUTS", "write_diagnostics", "write_summary", "plot_diagnostics"]
 
@@ -135,7 +136,7 @@ def write_diagnostics(path: str | PathLike[str], records: Sequence[Mapping[str, 
     """Write one CSV line per frame and target, columns ``header``.
 
     A run passes ``("frame", "id")`` and its tracker's
-    :func:`~plugins.video_tracking.tracker.diagnostic_columns`.
+    :func:`~belief_tracking.tracker.diagnostic_columns`.
     """
     with open(path, "w", encoding="ascii", newline="") as handle:
         writer = csv.writer(handle, lineterminator="\n")
@@ -182,6 +183,7 @@ def plot_diagnostics(path: str | PathLike[str], records: Sequence[Mapping[str, f
     effective sample size.  Uses matplotlib's Agg canvas directly, so no global backend is
     touched.  Keys missing from the records leave their panel empty.
     """
+    require("matplotlib")
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 

@@ -46,7 +46,7 @@ from typing import Optional, Protocol
 
 import numpy as np
 
-from plugins.video_tracking.errors import TrackingError
+from belief_tracking.errors import TrackingError
 
 __all__ = [
     "STATE",
@@ -180,7 +180,7 @@ class MotionConfig:
     >>> MotionConfig(sigma_pos=-1)
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.TrackingError: MotionConfig.sigma_pos must be non-negative, got -1
+    belief_tracking.errors.TrackingError: MotionConfig.sigma_pos must be non-negative, got -1
     """
 
     sigma_pos: float = 3.0
@@ -584,7 +584,7 @@ def get_resampler(name: str) -> Callable[..., np.ndarray]:
     >>> get_resampler("bootstrap")
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.TrackingError: unknown resampler 'bootstrap'; known: multinomial, residual, stratified, systematic
+    belief_tracking.errors.TrackingError: unknown resampler 'bootstrap'; known: multinomial, residual, stratified, systematic
     """
     try:
         return RESAMPLERS[name]

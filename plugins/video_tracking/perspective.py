@@ -27,9 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from plugins.video_tracking.boxes import check_boxes
-from plugins.video_tracking import checks
-from plugins.video_tracking.errors import TrackingError
+from belief_tracking.boxes import check_boxes
+from belief_tracking import checks
+from belief_tracking.errors import TrackingError
 
 __all__ = ["PerspectiveScale", "PersonSize", "MAX_SCALE_CHANGE"]
 

@@ -1,8 +1,8 @@
 """A whole tracking run: frames in, files out (``belief track``).
 
-:func:`run` opens the source, makes a :class:`~plugins.video_tracking.tracker.Tracker`,
+:func:`run` opens the source, makes a :class:`~belief_tracking.tracker.Tracker`,
 consumes its frame results while showing progress and timing the tracker's own work, and
-writes the run's files (:mod:`~plugins.video_tracking.outputs`), scored against a ground
+writes the run's files (:mod:`~belief_tracking.outputs`), scored against a ground
 truth when one is given.  The tracker itself never touches a file.
 """
 
@@ -15,14 +15,15 @@ from os import PathLike
 
 import numpy as np
 
-from plugins.video_tracking import outputs
-from plugins.video_tracking.config import TrackerConfig
-from plugins.video_tracking.detections import Detections, check_detections
-from plugins.video_tracking.errors import DetectionFileError, InitError, TrackingError
-from plugins.video_tracking.initiation import InitPlan
-from plugins.video_tracking.motfiles import read_mot, write_tracks
-from plugins.video_tracking.sources import open_source
-from plugins.video_tracking.tracker import Tracker
+from belief_tracking import outputs
+from belief_tracking.config import TrackerConfig
+from belief_tracking.detections import Detections, check_detections
+from belief_tracking.errors import DetectionFileError, InitError, TrackingError
+from belief_tracking.extras import require
+from belief_tracking.initiation import InitPlan
+from belief_tracking.motfiles import read_mot, write_tracks
+from belief_tracking.sources import open_source
+from belief_tracking.tracker import Tracker
 
 __all__ = ["Summary", "run"]
 
@@ -72,12 +73,12 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
     Parameters
     ----------
     source : path, FrameSource, Scene or ndarray of uint8, shape (T, H, W, 3)
-        Anything :func:`~plugins.video_tracking.sources.open_source` opens: a video file, a
+        Anything :func:`~belief_tracking.sources.open_source` opens: a video file, a
         folder of images, an image pattern or a MOTChallenge sequence folder (all decoded
         frame by frame), a source already open, a rendered synthetic scene, or frames.
     init : InitPlan or None
-        Births and deaths of the targets (:func:`~plugins.video_tracking.initiation.init_from_gt`,
-        :func:`~plugins.video_tracking.initiation.read_init_boxes`); None leaves them all to
+        Births and deaths of the targets (:func:`~belief_tracking.initiation.init_from_gt`,
+        :func:`~belief_tracking.initiation.read_init_boxes`); None leaves them all to
         the automatic initiation (``config.initiation``).
     config : TrackerConfig
         With ``config.warm_up`` > 0 the background model first learns from that many frames
@@ -93,13 +94,13 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
     progress : bool
         Show a progress bar on standard error (only when it is a terminal).
     gt : ndarray or path, optional
-        Ground truth to score the tracks against (:func:`~plugins.video_tracking.evaluation.evaluate`).
+        Ground truth to score the tracks against (:func:`~belief_tracking.evaluation.evaluate`).
     extra_outputs : dict of str to callable, optional
         Further files ``name -> write(path)``, committed with the others.
     write_plot : bool
         Draw ``diagnostics.png``.
     detections : Detections, optional
-        A detector's boxes by frame (:func:`~plugins.video_tracking.detections.read_detections`),
+        A detector's boxes by frame (:func:`~belief_tracking.detections.read_detections`),
         given to the tracker frame by frame; the summary records their source.  Detections
         after the last frame or wholly outside the image are refused before anything is
         written.
@@ -115,11 +116,11 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
         detections that do not fit the video (:class:`DetectionFileError`), …
         On any error the staged files are deleted: nothing that looks complete is left.
     """
-    from tqdm import tqdm
+    tqdm = require("tqdm").tqdm
 
     from belief import __version__
-    from plugins.video_tracking.evaluation import evaluate
-    from plugins.video_tracking.video import AnnotatedVideoWriter
+    from belief_tracking.evaluation import evaluate
+    from belief_tracking.video import AnnotatedVideoWriter
 
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise TrackingError(f"the seed must be a non-negative integer, got {seed!r}")

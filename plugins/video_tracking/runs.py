@@ -7,7 +7,7 @@ It runs on a worker (a local process or a Dask worker): a synthetic scene is ren
 there, and a recorded video (and its detection file, if any) must be readable at the same
 path.  A sequence with a detection file gives each frame's boxes to the tracker
 (``Tracker.track(frames, detections=...)``); its cells fuse the ``"detections"`` cue
-(:meth:`plugins.video_tracking.experiment.Cell.settings`).
+(:meth:`belief_tracking.experiment.Cell.settings`).
 """
 
 from __future__ import annotations
@@ -18,11 +18,11 @@ from typing import Any
 
 import numpy as np
 
-from plugins.video_tracking.evaluation import evaluate, matched_pairs
-from plugins.video_tracking.experiment import CELL_FORMAT, Cell
-from plugins.video_tracking.initiation import init_from_gt
-from plugins.video_tracking.sources import open_source
-from plugins.video_tracking.tracker import Tracker
+from belief_tracking.evaluation import evaluate, matched_pairs
+from belief_tracking.experiment import CELL_FORMAT, Cell
+from belief_tracking.initiation import init_from_gt
+from belief_tracking.sources import open_source
+from belief_tracking.tracker import Tracker
 
 __all__ = ["run_cell", "CURVE_COLUMNS"]
 
@@ -42,7 +42,7 @@ def run_cell(cell: Cell) -> dict[str, Any]:
     -------
     dict
         ``row``, the row of ``results.csv``
-        (:data:`~plugins.video_tracking.tables.RESULT_COLUMNS`); ``errors`` (target id →
+        (:data:`~belief_tracking.tables.RESULT_COLUMNS`); ``errors`` (target id →
         list of ``[frame, centre error]``); ``curves`` (rows ``frame, id`` and
         :data:`CURVE_COLUMNS`); ``tracks`` (the rows of ``tracks.txt``); ``format`` and
         ``key`` (which cell, in which file format).
@@ -122,7 +122,7 @@ def _centre_errors(gt: np.ndarray, tracks: np.ndarray, by_id: bool) -> dict[int,
 
     ``by_id``: the estimate is the track with the target's id, whatever its overlap; otherwise
     it is the track paired with the target in that frame by the scoring (IoU ≥ 0.5,
-    :func:`~plugins.video_tracking.evaluation.matched_pairs`).
+    :func:`~belief_tracking.evaluation.matched_pairs`).
     """
     gt = np.asarray(gt, dtype=np.float64)
     tracks = np.asarray(tracks, dtype=np.float64).reshape(-1, 10)

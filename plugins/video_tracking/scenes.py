@@ -30,7 +30,7 @@ Conventions
   hidden by a nearer person or by a static occluder.  Being cut off by the image
   border does not count as being hidden.
 
-Invalid settings raise :class:`~plugins.video_tracking.errors.TrackingError`, which is
+Invalid settings raise :class:`~belief_tracking.errors.TrackingError`, which is
 a ``ValueError``, as soon as a configuration object is made.  OpenCV is used only by
 :func:`write_video`.
 """
@@ -44,7 +44,8 @@ from pathlib import Path
 
 import numpy as np
 
-from plugins.video_tracking.errors import TrackingError
+from belief_tracking.errors import TrackingError
+from belief_tracking.extras import require
 
 __all__ = [
     "Walker",
@@ -721,7 +722,7 @@ def write_video(path: str | Path, scene: Scene | Iterable[np.ndarray], fps: floa
     TrackingError
         If a frame is not (H, W, 3) uint8 or differs in size from the first.
     """
-    import cv2  # the only OpenCV use of this module: keep it out of the import path
+    cv2 = require("cv2")  # OpenCV stays at the edges: out of the import path
 
     writer = None
     size = None

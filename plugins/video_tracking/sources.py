@@ -15,18 +15,18 @@ A source is any of
 * a MOTChallenge sequence folder (one with a ``seqinfo.ini``): its frames are
   ``imDir/000001`` … ``imDir/<seqLength>`` with the extension ``imExt``, at ``frameRate``;
   the public detections at ``det/det.txt`` are not used unless they are asked for
-  (:func:`~plugins.video_tracking.detections.read_detections`);
-* a rendered :class:`~plugins.video_tracking.scenes.Scene` or a (T, H, W, 3) ``uint8`` array.
+  (:func:`~belief_tracking.detections.read_detections`);
+* a rendered :class:`~belief_tracking.scenes.Scene` or a (T, H, W, 3) ``uint8`` array.
 
 Each is tracked frame by frame from Python as well as by ``belief track``:
 
 >>> import tempfile
 >>> import cv2
->>> from plugins.video_tracking import scenes
->>> from plugins.video_tracking.config import TrackerConfig
->>> from plugins.video_tracking.detections import read_detections
->>> from plugins.video_tracking.initiation import init_from_gt
->>> from plugins.video_tracking.tracker import Tracker
+>>> from belief_tracking import scenes
+>>> from belief_tracking.config import TrackerConfig
+>>> from belief_tracking.detections import read_detections
+>>> from belief_tracking.initiation import init_from_gt
+>>> from belief_tracking.tracker import Tracker
 >>> scene = scenes.render(scenes.crossing(0))
 >>> folder = Path(tempfile.mkdtemp())
 >>> for k, image in enumerate(scene.frames[:3], start=1):   # any folder of images will do
@@ -57,7 +57,7 @@ from pathlib import Path
 
 import numpy as np
 
-from plugins.video_tracking.errors import TrackingError, VideoError
+from belief_tracking.errors import TrackingError, VideoError
 
 __all__ = ["FrameSource", "open_source", "IMAGE_EXTENSIONS"]
 
@@ -124,7 +124,7 @@ class FrameSource:
         if self._path is None:
             frames = self._frames
             return (frames[k] for k in sorted(picks) if k < len(frames))  # type: ignore[index]
-        from plugins.video_tracking.video import VideoReader
+        from belief_tracking.video import VideoReader
 
         path = self._path
 
@@ -181,7 +181,7 @@ def open_source(source) -> FrameSource:
     >>> open_source(folder)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    plugins.video_tracking.errors.VideoError: .../seqinfo.ini: no imDir (the folder of the frames, as in imDir=img1)
+    belief_tracking.errors.VideoError: .../seqinfo.ini: no imDir (the folder of the frames, as in imDir=img1)
     """
     if isinstance(source, FrameSource):
         return source
@@ -194,7 +194,7 @@ def open_source(source) -> FrameSource:
             return _image_folder(path)
         if not path.exists() and "%" in text:
             return _pattern(text)
-        from plugins.video_tracking.video import VideoReader
+        from belief_tracking.video import VideoReader
 
         reader = VideoReader(source)
         return FrameSource(reader, name=text, width=reader.width, height=reader.height, fps=reader.fps,
@@ -210,7 +210,7 @@ def open_source(source) -> FrameSource:
 
 def _images(files: Sequence[Path | str], name: str, kind: str, fps: float = 25.0,
             size: tuple[int, int] | None = None) -> FrameSource:
-    from plugins.video_tracking.video import ImageSequenceReader
+    from belief_tracking.video import ImageSequenceReader
 
     reader = ImageSequenceReader(files, name=name, fps=fps, size=size)
 

@@ -64,7 +64,7 @@ def rms_per_frame(runs: Sequence[tuple[str, str, Mapping[str, Any]]]) -> list[di
     runs : sequence of (sequence name, method name, record)
         Finished runs; those of one sequence and method are the runs k = 1..n_runs.  A
         record's ``errors`` maps a target id to its ``[frame, centre error]`` pairs
-        (:func:`plugins.video_tracking.runs.run_cell`).
+        (:func:`belief_tracking.runs.run_cell`).
 
     Returns
     -------

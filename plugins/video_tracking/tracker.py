@@ -5,22 +5,22 @@
 1. **predict** — every target's particles move by the constant-velocity model (W-S2), and
    their windows take the size the perspective model gives their row;
 2. **score** — every cue scores every particle of every target against θ_1 … θ_τ and FA
-   (W-S3, :mod:`~plugins.video_tracking.cues`);
+   (W-S3, :mod:`~belief_tracking.cues`);
 3. **weigh** — the weighting strategy turns the scores into log-weights
-   (:mod:`~plugins.video_tracking.weighting`: the belief rules, C's adaptive fusion, sum,
+   (:mod:`~belief_tracking.weighting`: the belief rules, C's adaptive fusion, sum,
    product);
 4. **estimate** — each target's weights are normalised within its set and its state is
    their weighted mean (W-S4, W (6)); then, when the appearance is followed, the total
    similarity, the occlusion flag and the template update of C (15)–(16)
-   (:mod:`~plugins.video_tracking.appearance`);
+   (:mod:`~belief_tracking.appearance`);
 5. **resample** — each set is resampled (W-S5), to an adaptive size on request (SPEC B.3);
 6. **manage tracks** — planned and automatic births and deaths
-   (:mod:`~plugins.video_tracking.tracks`).
+   (:mod:`~belief_tracking.tracks`).
 
 The tracker is an iterator over frames: :meth:`Tracker.track` (or iterating a tracker made
 with ``frames=``) yields one :class:`FrameResult` per frame, with the estimates and one
 diagnostics record; writing files, progress and scoring belong to
-:mod:`~plugins.video_tracking.runner`.  Nothing costs 2^τ: the cues are linear in τ·N and
+:mod:`~belief_tracking.runner`.  Nothing costs 2^τ: the cues are linear in τ·N and
 the fusion's closed forms are polynomial in τ.  Every random draw comes from the one
 ``numpy.random.Generator`` given to the tracker, so a run is reproducible from its seed.
 
@@ -37,19 +37,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from plugins.video_tracking.appearance import AppearanceFollower
-from plugins.video_tracking.association import assign
-from plugins.video_tracking.background import BackgroundModel
-from plugins.video_tracking.blobs import box_mask
-from plugins.video_tracking.candidates import BlobCandidates
-from plugins.video_tracking.config import TrackerConfig
-from plugins.video_tracking.cues import CUES, AppearanceCue, Observation, bhattacharyya
-from plugins.video_tracking.detections import Detections, check_rows
-from plugins.video_tracking.errors import InitError, TrackingError
-from plugins.video_tracking.initiation import InitPlan
-from plugins.video_tracking.particles import CX, CY, LOG_SCALE, VX, VY, ConstantVelocity, ParticleSet, adaptive_count
-from plugins.video_tracking.tracks import Estimate, TrackManager
-from plugins.video_tracking.weighting import BELIEF_COLUMNS, Evidence, Weighing, make_weighting
+from belief_tracking.appearance import AppearanceFollower
+from belief_tracking.association import assign
+from belief_tracking.background import BackgroundModel
+from belief_tracking.blobs import box_mask
+from belief_tracking.candidates import BlobCandidates
+from belief_tracking.config import TrackerConfig
+from belief_tracking.cues import CUES, AppearanceCue, Observation, bhattacharyya
+from belief_tracking.detections import Detections, check_rows
+from belief_tracking.errors import InitError, TrackingError
+from belief_tracking.initiation import InitPlan
+from belief_tracking.particles import CX, CY, LOG_SCALE, VX, VY, ConstantVelocity, ParticleSet, adaptive_count
+from belief_tracking.tracks import Estimate, TrackManager
+from belief_tracking.weighting import BELIEF_COLUMNS, Evidence, Weighing, make_weighting
 
 __all__ = ["Tracker", "FrameResult", "FrameDiagnostics", "Estimate", "diagnostic_columns"]
 
@@ -182,8 +182,8 @@ class Tracker:
 
     Examples
     --------
-    >>> from plugins.video_tracking import scenes
-    >>> from plugins.video_tracking.initiation import init_from_gt
+    >>> from belief_tracking import scenes
+    >>> from belief_tracking.initiation import init_from_gt
     >>> scene = scenes.render(scenes.crossing(0))
     >>> tracker = Tracker(TrackerConfig(particles=20), init_from_gt(scene.ground_truth), np.random.default_rng(0))
     >>> results = list(tracker.track(scene.frames[:3]))
@@ -268,7 +268,7 @@ class Tracker:
             The BGR frame.
         detections : ndarray, shape (n, 5), optional
             The frame's detector boxes ``x, y, w, h, score`` in 0-based pixels
-            (:meth:`Detections.at <plugins.video_tracking.detections.Detections.at>`); None
+            (:meth:`Detections.at <belief_tracking.detections.Detections.at>`); None
             when the run has no detector.
 
         Returns

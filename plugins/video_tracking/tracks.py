@@ -2,15 +2,15 @@
 
 :class:`TrackManager` holds the targets in birth order, which is also the order of the
 appearance cues' templates: a birth appends a template to every appearance cue and a death
-removes it.  Births come from the :class:`~plugins.video_tracking.initiation.InitPlan`
+removes it.  Births come from the :class:`~belief_tracking.initiation.InitPlan`
 (by hand or from a ground truth) and, without a plan or for the people who enter later,
 from the frame's candidate boxes, by the rules of
-:class:`~plugins.video_tracking.lifecycle.Lifecycle`: a target that took a candidate moves
+:class:`~belief_tracking.lifecycle.Lifecycle`: a target that took a candidate moves
 its box towards it (:meth:`TrackManager.follow_candidates`); one that nothing supports is
 hidden, then lost, and its templates are remembered so that a newborn target that looks
 like it, near where it should be, takes back its id.  The boxes of planned births fit the
 perspective model of the window sizes
-(:class:`~plugins.video_tracking.perspective.PerspectiveScale`).
+(:class:`~belief_tracking.perspective.PerspectiveScale`).
 
 Every random draw (the particles of a newborn target, W-S1) comes from the generator given
 to the manager.
@@ -23,15 +23,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from plugins.video_tracking.boxes import check_boxes
-from plugins.video_tracking.config import TrackerConfig
-from plugins.video_tracking.association import UNASSIGNED
-from plugins.video_tracking.cues import AppearanceCue, bhattacharyya
-from plugins.video_tracking.errors import InitError, TrackingError
-from plugins.video_tracking.initiation import InitPlan, TargetInit
-from plugins.video_tracking.lifecycle import Lifecycle
-from plugins.video_tracking.particles import CX, CY, LOG_SCALE, VX, VY, ParticleSet, initialise
-from plugins.video_tracking.perspective import PerspectiveScale
+from belief_tracking.boxes import check_boxes
+from belief_tracking.config import TrackerConfig
+from belief_tracking.association import UNASSIGNED
+from belief_tracking.cues import AppearanceCue, bhattacharyya
+from belief_tracking.errors import InitError, TrackingError
+from belief_tracking.initiation import InitPlan, TargetInit
+from belief_tracking.lifecycle import Lifecycle
+from belief_tracking.particles import CX, CY, LOG_SCALE, VX, VY, ParticleSet, initialise
+from belief_tracking.perspective import PerspectiveScale
 
 __all__ = ["Estimate", "Target", "TrackManager"]
 

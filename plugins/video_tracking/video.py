@@ -14,10 +14,12 @@ from collections.abc import Iterator, Sequence
 from os import PathLike
 from pathlib import Path
 
-import cv2
 import numpy as np
 
-from plugins.video_tracking.errors import VideoError
+from belief_tracking.errors import VideoError
+from belief_tracking.extras import require
+
+cv2 = require("cv2")
 
 __all__ = ["VideoReader", "ImageSequenceReader", "AnnotatedVideoWriter", "track_colour"]
 

@@ -5,11 +5,11 @@ A strategy is a small part with one method, :meth:`Weighting.weigh`, which takes
 θ_1 … θ_τ and FA, and each particle's own target) and returns a :class:`Weighing`: the
 log-weights, and the strategy's own diagnostics per target.  The strategies are registered
 in :data:`WEIGHTINGS` by the names of :attr:`TrackerConfig.fusion
-<plugins.video_tracking.config.TrackerConfig.fusion>`:
+<belief_tracking.config.TrackerConfig.fusion>`:
 
 * ``"belief"`` — :class:`BeliefWeighting`: the cues' mass functions combined by a rule of
   :mod:`belief`, weight Bel(θ_J) (or Pls, BetP) of the particle's own target (W (7), W (32));
-* ``"adaptive"`` — :class:`~plugins.video_tracking.adaptive.AdaptiveWeighting`: C's
+* ``"adaptive"`` — :class:`~belief_tracking.adaptive.AdaptiveWeighting`: C's
   confidence-weighted mix of the product and sum rules (C (11)–(14));
 * ``"sum"`` and ``"product"`` — :class:`SumWeighting`, :class:`ProductWeighting`: the
   cues' own-target likelihoods added with equal weights, or multiplied.
@@ -37,10 +37,10 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
-from plugins.video_tracking.fusion import CueFusion, FusionConfig
+from belief_tracking.fusion import CueFusion, FusionConfig
 
 if TYPE_CHECKING:
-    from plugins.video_tracking.config import TrackerConfig
+    from belief_tracking.config import TrackerConfig
 
 __all__ = ["Evidence", "Weighing", "Weighting", "BeliefWeighting", "SumWeighting", "ProductWeighting",
            "WEIGHTINGS", "make_weighting", "target_means", "BELIEF_COLUMNS"]
@@ -138,7 +138,7 @@ class BeliefWeighting:
     """The belief strategy: cue mass functions fused by a :mod:`belief` rule (W (7), W (20)–(21), W (32)).
 
     Each cue's scores become one Bayesian mass function per particle over
-    {θ_1, …, θ_τ, FA} (:func:`~plugins.video_tracking.fusion.cue_masses`); the c mass
+    {θ_1, …, θ_τ, FA} (:func:`~belief_tracking.fusion.cue_masses`); the c mass
     functions of every particle are combined at once under the tracking model, and a
     particle of target J gets the log of Bel(θ_J) (or Pls, BetP: ``config.weight``).
 
@@ -165,7 +165,7 @@ class BeliefWeighting:
         self._fusion: CueFusion | None = None
 
     def fuse(self, evidence: Evidence):
-        """The :class:`~plugins.video_tracking.fusion.FusionResult` of one frame."""
+        """The :class:`~belief_tracking.fusion.FusionResult` of one frame."""
         if self._fusion is None or self._fusion.n_targets != evidence.n_targets:
             self._fusion = CueFusion(evidence.n_targets, self.config)
         return self._fusion.fuse(evidence.scores, evidence.owner)
@@ -213,7 +213,7 @@ def _belief(config: "TrackerConfig", rng: np.random.Generator) -> BeliefWeightin
 
 
 def _adaptive(config: "TrackerConfig", rng: np.random.Generator):
-    from plugins.video_tracking.adaptive import AdaptiveWeighting
+    from belief_tracking.adaptive import AdaptiveWeighting
 
     return AdaptiveWeighting(config.adaptive_fusion, config.cues, rng)
 

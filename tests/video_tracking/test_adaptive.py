@@ -10,7 +10,7 @@ import warnings
 import numpy as np
 import pytest
 
-from plugins.video_tracking.adaptive import (
+from belief_tracking.adaptive import (
     AdaptiveConfig,
     AdaptiveWeighting,
     feature_confidences,
@@ -23,9 +23,9 @@ from plugins.video_tracking.adaptive import (
     total_similarity,
     update_templates,
 )
-from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.particles import DegenerateWeightsWarning
-from plugins.video_tracking.weighting import Evidence
+from belief_tracking.errors import TrackingError
+from belief_tracking.particles import DegenerateWeightsWarning
+from belief_tracking.weighting import Evidence
 
 EPS = 1e-6
 SQUARE = np.array([[0.0, 0.0], [2.0, 0.0], [0.0, 2.0], [2.0, 2.0]])  # corners of a 2-px square

@@ -7,10 +7,10 @@ import doctest
 import numpy as np
 import pytest
 
-from plugins.video_tracking import background
-from plugins.video_tracking.background import BackgroundConfig, BackgroundModel
-from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.scenes import crossing, render
+from belief_tracking import background
+from belief_tracking.background import BackgroundConfig, BackgroundModel
+from belief_tracking.errors import TrackingError
+from belief_tracking.scenes import crossing, render
 
 #: Pixel-exact checks need the mixtures at full size (the default shrinks frames twice).
 FULL = BackgroundConfig(downscale=1)

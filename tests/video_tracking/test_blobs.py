@@ -7,12 +7,12 @@ import doctest
 import numpy as np
 import pytest
 
-from plugins.video_tracking import blobs
-from plugins.video_tracking.blobs import box_mask, fit_person_size, person_boxes
-from plugins.video_tracking.boxes import iou
-from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.initiation import foreground_blobs
-from plugins.video_tracking.perspective import PersonSize
+from belief_tracking import blobs
+from belief_tracking.blobs import box_mask, fit_person_size, person_boxes
+from belief_tracking.boxes import iou
+from belief_tracking.errors import TrackingError
+from belief_tracking.initiation import foreground_blobs
+from belief_tracking.perspective import PersonSize
 
 H, W = 240, 320
 SIZE = PersonSize(0.25, 10.0, 0.4)          # feet on row 200: 60 x 24 px

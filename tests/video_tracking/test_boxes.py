@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from plugins.video_tracking.boxes import box_centres, check_boxes, iou
-from plugins.video_tracking.errors import InitError, TrackingError
+from belief_tracking.boxes import box_centres, check_boxes, iou
+from belief_tracking.errors import InitError, TrackingError
 
 boxes = st.lists(st.tuples(st.integers(-20, 20), st.integers(-20, 20), st.integers(0, 15), st.integers(0, 15)),
                  max_size=5)

@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from plugins.video_tracking import background, cues
-from plugins.video_tracking.background import BackgroundConfig, BackgroundModel
-from plugins.video_tracking.cues import (
+from belief_tracking import background, cues
+from belief_tracking.background import BackgroundConfig, BackgroundModel
+from belief_tracking.cues import (
     CUES,
     AppearanceCue,
     ColourConfig,
@@ -22,8 +22,8 @@ from plugins.video_tracking.cues import (
     colour_bins,
     make_cue,
 )
-from plugins.video_tracking.errors import TrackingError, UnknownCueError
-from plugins.video_tracking.fusion import CueFusion
+from belief_tracking.errors import TrackingError, UnknownCueError
+from belief_tracking.fusion import CueFusion
 
 GREY = (128, 128, 128)
 RED = (0, 0, 255)          # BGR
@@ -497,7 +497,7 @@ def test_docstring_examples(module):
 
 
 def test_the_bin_image_of_a_frame_is_computed_once_for_every_cue(monkeypatch):
-    import plugins.video_tracking.cues as cues_module
+    import belief_tracking.cues as cues_module
 
     calls = []
     real = cues_module.colour_bins
@@ -512,7 +512,7 @@ def test_the_bin_image_of_a_frame_is_computed_once_for_every_cue(monkeypatch):
 
 @pytest.mark.parametrize("cue_type", [ColourCue, ForegroundColourCue])
 def test_scores_of_many_particles_are_built_block_by_block_without_changing_them(cue_type):
-    from plugins.video_tracking.cues import HISTOGRAM_BLOCK, _log_gaussian, bhattacharyya
+    from belief_tracking.cues import HISTOGRAM_BLOCK, _log_gaussian, bhattacharyya
 
     rng = np.random.default_rng(5)
     image = rng.integers(0, 256, size=(80, 120, 3), dtype=np.uint8)

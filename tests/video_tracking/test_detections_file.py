@@ -10,13 +10,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from plugins.video_tracking import detections as detections_module
-from plugins.video_tracking import outputs
-from plugins.video_tracking.config import TrackerConfig
-from plugins.video_tracking.detections import Detections, check_detections, read_detections, write_detections
-from plugins.video_tracking.errors import DetectionFileError, TrackFileError, TrackingError
-from plugins.video_tracking.initiation import read_init_boxes
-from plugins.video_tracking.runner import run
+from belief_tracking import detections as detections_module
+from belief_tracking import outputs
+from belief_tracking.config import TrackerConfig
+from belief_tracking.detections import Detections, check_detections, read_detections, write_detections
+from belief_tracking.errors import DetectionFileError, TrackFileError, TrackingError
+from belief_tracking.initiation import read_init_boxes
+from belief_tracking.runner import run
 
 
 def test_docstring_examples():
@@ -145,7 +145,7 @@ def plan(tmp_path):
 
 
 def test_the_run_hands_the_detections_to_the_tracker_frame_by_frame(tmp_path, plan, monkeypatch):
-    from plugins.video_tracking import runner
+    from belief_tracking import runner
 
     given_to_tracker = []
     real_step = runner.Tracker.step
@@ -178,7 +178,7 @@ def test_detections_that_do_not_fit_are_refused_before_any_output(tmp_path, plan
 
 
 def test_detections_past_a_length_announced_wrongly_are_refused_after_the_run(tmp_path, plan):
-    from plugins.video_tracking.sources import FrameSource
+    from belief_tracking.sources import FrameSource
 
     frames = frames_with_a_red_block()
     unknown_length = FrameSource(frames, name="stream", width=64, height=48, fps=25.0, count=None)

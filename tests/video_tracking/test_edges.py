@@ -6,8 +6,8 @@ import cv2
 import numpy as np
 import pytest
 
-from plugins.video_tracking import cues as cues_module
-from plugins.video_tracking.cues import (
+from belief_tracking import cues as cues_module
+from belief_tracking.cues import (
     CUES,
     HISTOGRAM_BLOCK,
     AppearanceCue,
@@ -23,7 +23,7 @@ from plugins.video_tracking.cues import (
     make_cue,
     orientation_bins,
 )
-from plugins.video_tracking.errors import TrackingError
+from belief_tracking.errors import TrackingError
 
 SIGMA = 0.15
 FLAT = -1.0 / (2 * SIGMA ** 2)          # log p of ρ = 0

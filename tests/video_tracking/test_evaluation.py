@@ -1,7 +1,6 @@
 """Track evaluation: MOT file reading, IoU distances, CLEAR MOT / IDF1 scores and ``belief eval``."""
 
 import argparse
-import doctest
 import json
 import math
 from fractions import Fraction
@@ -13,11 +12,11 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from belief.errors import BeliefError
-from plugins.video_tracking import evaluation, motfiles
-from plugins.video_tracking.cli import register_eval
-from plugins.video_tracking.errors import TrackFileError, TrackingError
-from plugins.video_tracking.evaluation import Scores, evaluate, iou_distance
-from plugins.video_tracking.motfiles import read_mot
+from belief_tracking import motfiles
+from belief_tracking.cli import register_eval
+from belief_tracking.errors import TrackFileError, TrackingError
+from belief_tracking.evaluation import Scores, evaluate, iou_distance
+from belief_tracking.motfiles import read_mot
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 PETS_GT = REPO_ROOT.parent / "shared" / "data" / "pets09_s2l1_f0001_0200" / "gt.txt"
@@ -41,12 +40,6 @@ def shifted(rows, dx, dy, id_offset=0):
     out[:, 3] += dy
     out[:, 1] += id_offset
     return out
-
-
-# -- the doctested examples (plugins/ is outside pytest's doctest paths) ------------------------------
-def test_docstring_examples():
-    result = doctest.testmod(evaluation, optionflags=doctest.NORMALIZE_WHITESPACE)
-    assert result.attempted > 0 and result.failed == 0
 
 
 # -- evaluate: hand-computed cases --------------------------------------------------------------------
@@ -347,7 +340,7 @@ def test_read_mot_accepts_an_empty_tracks_file_when_asked(mot_file):
 
 
 def test_a_mot17_ground_truth_from_write_gt_reads_back_and_scores(tmp_path):
-    from plugins.video_tracking import scenes
+    from belief_tracking import scenes
 
     scene = scenes.render(scenes.crossing(0))
     # frames 40 to 60: walker 1 goes behind walker 2, so the visibilities run from 1 down to 0

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from belief.cli import main
-from plugins.video_tracking import grid
-from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.experiment import (
+from belief_tracking import grid
+from belief_tracking.errors import TrackingError
+from belief_tracking.experiment import (
     Cell,
     ExperimentError,
     MethodSpec,
@@ -21,9 +21,9 @@ from plugins.video_tracking.experiment import (
     experiment_from_mapping,
     load_experiment,
 )
-from plugins.video_tracking.grid import run_experiment
-from plugins.video_tracking.runs import _centre_errors, run_cell
-from plugins.video_tracking.tables import RESULT_COLUMNS, RMS_COLUMNS, TIMING_COLUMNS, rms_per_frame
+from belief_tracking.grid import run_experiment
+from belief_tracking.runs import _centre_errors, run_cell
+from belief_tracking.tables import RESULT_COLUMNS, RMS_COLUMNS, TIMING_COLUMNS, rms_per_frame
 
 #: 2 rules x 2 seeds x 1 synthetic scene, kept short.
 SMALL = {
@@ -260,7 +260,7 @@ def test_methods_take_any_tracker_setting_and_nested_tables():
 
 def test_a_cell_runs_without_writing_files(tmp_path, monkeypatch):
     # The cell consumes the tracker's frame results directly: no run() and no output folder.
-    from plugins.video_tracking import runner
+    from belief_tracking import runner
 
     monkeypatch.setattr(runner, "run", lambda *a, **k: pytest.fail("run_cell must not go through run()"))
     monkeypatch.chdir(tmp_path)
@@ -307,7 +307,7 @@ def test_bad_configurations_name_the_problem(mapping, message, tmp_path):
 
 
 def test_a_recorded_video_is_resolved_against_the_data_folder(tmp_path):
-    from plugins.video_tracking import scenes
+    from belief_tracking import scenes
 
     scene = scenes.render(scenes.crossing())
     data = tmp_path / "data"
@@ -336,7 +336,7 @@ def write_gt_as_detections(path: Path, gt: np.ndarray) -> Path:
 @pytest.fixture(scope="module")
 def recorded_with_detections(tmp_path_factory):
     """A 20-frame crossing written as a video, its ground truth and detections made from it."""
-    from plugins.video_tracking import scenes
+    from belief_tracking import scenes
 
     scene = scenes.render(scenes.crossing())
     data = tmp_path_factory.mktemp("detections")

@@ -5,8 +5,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.fusion import CueFusion, FusionConfig, cue_masses
+from belief_tracking.errors import TrackingError
+from belief_tracking.fusion import CueFusion, FusionConfig, cue_masses
 
 
 def bayesian_rows(rng, rows, size):

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import doctest
 
 import numpy as np
 import pytest
 
-from plugins.video_tracking import initiation
-from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.initiation import (
+from belief_tracking.errors import TrackingError
+from belief_tracking.initiation import (
     InitiationConfig,
     foreground_blobs,
     foreground_fraction,
@@ -28,14 +26,6 @@ def mask_with(*boxes) -> np.ndarray:
     for x, y, w, h in boxes:
         mask[max(y, 0):max(y + h, 0), max(x, 0):max(x + w, 0)] = True
     return mask
-
-
-# -- the module's own examples (plugins/ is outside pytest's doctest paths) ------------------------------
-
-def test_the_docstring_examples_run():
-    result = doctest.testmod(initiation, optionflags=doctest.ELLIPSIS)
-    assert result.attempted >= 10
-    assert result.failed == 0
 
 
 # -- blobs ---------------------------------------------------------------------------------------------

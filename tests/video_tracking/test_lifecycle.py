@@ -9,15 +9,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from plugins.video_tracking import scenes
-from plugins.video_tracking.association import UNASSIGNED, assign, min_cost_assignment
-from plugins.video_tracking.boxes import iou
-from plugins.video_tracking.config import TrackerConfig
-from plugins.video_tracking.cues import DetectionConfig, DetectionCue, Observation
-from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.initiation import InitiationConfig
-from plugins.video_tracking.lifecycle import Lifecycle
-from plugins.video_tracking.tracker import Tracker
+from belief_tracking import scenes
+from belief_tracking.association import UNASSIGNED, assign, min_cost_assignment
+from belief_tracking.boxes import iou
+from belief_tracking.config import TrackerConfig
+from belief_tracking.cues import DetectionConfig, DetectionCue, Observation
+from belief_tracking.errors import TrackingError
+from belief_tracking.initiation import InitiationConfig
+from belief_tracking.lifecycle import Lifecycle
+from belief_tracking.tracker import Tracker
 
 NONE = np.zeros(0, dtype=np.intp)
 

@@ -10,8 +10,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.particles import (
+from belief_tracking.errors import TrackingError
+from belief_tracking.particles import (
     CX,
     CY,
     LOG_SCALE,
@@ -655,7 +655,7 @@ def test_a_whole_filter_run_is_reproducible_from_its_seed():
 
 @pytest.mark.parametrize("value", [True, "fast", float("nan")])
 def test_motion_settings_refuse_bools_text_and_nan(value):
-    from plugins.video_tracking.errors import TrackingError
+    from belief_tracking.errors import TrackingError
 
     with pytest.raises(TrackingError, match="sigma_pos must be"):
         MotionConfig(sigma_pos=value)

@@ -7,9 +7,9 @@ import doctest
 import numpy as np
 import pytest
 
-from plugins.video_tracking import perspective
-from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.perspective import PerspectiveScale, PersonSize
+from belief_tracking import perspective
+from belief_tracking.errors import TrackingError
+from belief_tracking.perspective import PerspectiveScale, PersonSize
 
 A, B, ASPECT = 0.25, 12.0, 0.4
 

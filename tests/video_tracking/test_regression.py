@@ -21,8 +21,8 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-from plugins.video_tracking.experiment import experiment_from_mapping
-from plugins.video_tracking.runs import run_cell
+from belief_tracking.experiment import experiment_from_mapping
+from belief_tracking.runs import run_cell
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "benchmarks" / "comparison.toml"

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import doctest
 from dataclasses import replace
 
 import numpy as np
@@ -10,9 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from plugins.video_tracking import scenes
-from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.scenes import (
+from belief_tracking.errors import TrackingError
+from belief_tracking.scenes import (
     PRESETS,
     BackgroundStyle,
     Lighting,
@@ -61,14 +59,6 @@ def track_of(scene, walker_id: int):
     table = scene.ground_truth[rows]
     boxes = table[:, 2:6] - np.array([1, 1, 0, 0])
     return table[:, 0] - 1, boxes, scene.visibility[rows]
-
-
-# -- the module's own examples (plugins/ is outside pytest's doctest paths) ------------------------------
-
-def test_the_docstring_examples_run():
-    result = doctest.testmod(scenes, optionflags=doctest.ELLIPSIS)
-    assert result.attempted >= 5
-    assert result.failed == 0
 
 
 # -- determinism ---------------------------------------------------------------------------------------

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from belief.cli import main
-from plugins.video_tracking import scenes
-from plugins.video_tracking.cli import AUTOMATIC_WARM_UP, SCORES_EXPLAINED, register
-from plugins.video_tracking.errors import TrackingError
+from belief_tracking import scenes
+from belief_tracking.cli import AUTOMATIC_WARM_UP, SCORES_EXPLAINED, register
+from belief_tracking.errors import TrackingError
 
 OUTPUTS = {"tracks.txt", "diagnostics.csv", "diagnostics.png", "summary.json", "annotated.avi", "gt.txt", "scene.avi"}
 DATA = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "pets09_s2l1_f0001_0200"
@@ -80,18 +80,18 @@ def test_track_with_boxes_file(tmp_path):
 def test_pets_first_frames(tmp_path):
     if not (DATA / "video.avi").exists():
         pytest.skip("the PETS 2009 S2L1 data set is absent")
-    from plugins.video_tracking.motfiles import read_mot
-    from plugins.video_tracking.scenes import write_gt
+    from belief_tracking.motfiles import read_mot
+    from belief_tracking.scenes import write_gt
 
     gt = read_mot(DATA / "gt.txt")
     short = tmp_path / "gt20.txt"
     write_gt(short, gt[gt[:, 0] <= 20])
     out = tmp_path / "pets"
     # The tracker stops at the end of the video; births after frame 20 do not happen as the gt is cut.
-    from plugins.video_tracking.config import TrackerConfig
-    from plugins.video_tracking.initiation import init_from_gt
-    from plugins.video_tracking.runner import run
-    from plugins.video_tracking.video import VideoReader
+    from belief_tracking.config import TrackerConfig
+    from belief_tracking.initiation import init_from_gt
+    from belief_tracking.runner import run
+    from belief_tracking.video import VideoReader
 
     with VideoReader(DATA / "video.avi") as reader:
         frames = np.stack([f for _, f in zip(range(20), reader)])
@@ -106,7 +106,7 @@ def test_pets_first_frames(tmp_path):
 
 def test_readme_main_command_runs_the_tracking_demo_and_writes_every_output(tmp_path, capsys):
     readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
-    command = next(line for line in readme.splitlines() if line.startswith("pip install . && belief "))
+    command = next(line for line in readme.splitlines() if line.startswith("pip install \".[tracking]\" && belief "))
     argv = command.split("&& belief ", 1)[1].split()
     assert argv[:2] == ["track", "--demo"]
     out = tmp_path / "readme_run"
@@ -236,7 +236,7 @@ DETECTIONS = "1,-1,21,11,10,20,0.9,-1,-1,-1\n3,-1,22,11,10,20,0.8,-1,-1,-1\n"
 @pytest.fixture
 def quick_plot(monkeypatch):
     """diagnostics.png as a stub: drawing the real one costs seconds and is tested with the demo."""
-    from plugins.video_tracking import outputs
+    from belief_tracking import outputs
 
     monkeypatch.setattr(outputs, "plot_diagnostics", lambda path, *args, **kwargs: Path(path).write_bytes(b"png"))
 

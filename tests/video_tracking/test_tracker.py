@@ -7,14 +7,14 @@ import warnings
 import numpy as np
 import pytest
 
-from plugins.video_tracking import scenes
-from plugins.video_tracking.config import TrackerConfig
-from plugins.video_tracking.errors import InitError, TrackingError, UnknownCueError
-from plugins.video_tracking.evaluation import evaluate
-from plugins.video_tracking.initiation import InitPlan, TargetInit, init_from_boxes, init_from_gt, read_init_boxes
-from plugins.video_tracking.particles import DegenerateWeightsWarning
-from plugins.video_tracking.runner import run
-from plugins.video_tracking.tracker import Tracker
+from belief_tracking import scenes
+from belief_tracking.config import TrackerConfig
+from belief_tracking.errors import InitError, TrackingError, UnknownCueError
+from belief_tracking.evaluation import evaluate
+from belief_tracking.initiation import InitPlan, TargetInit, init_from_boxes, init_from_gt, read_init_boxes
+from belief_tracking.particles import DegenerateWeightsWarning
+from belief_tracking.runner import run
+from belief_tracking.tracker import Tracker
 
 
 def track(scene, config, seed, plan=None):

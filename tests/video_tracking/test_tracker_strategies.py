@@ -5,15 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from plugins.video_tracking import scenes
-from plugins.video_tracking.adaptive import AdaptiveConfig
-from plugins.video_tracking.boxes import iou
-from plugins.video_tracking.config import TrackerConfig
-from plugins.video_tracking.errors import InitError, TrackingError
-from plugins.video_tracking.evaluation import evaluate
-from plugins.video_tracking.initiation import InitiationConfig, init_from_gt
-from plugins.video_tracking.tracker import Tracker, diagnostic_columns
-from plugins.video_tracking.weighting import WEIGHTINGS
+from belief_tracking import scenes
+from belief_tracking.adaptive import AdaptiveConfig
+from belief_tracking.boxes import iou
+from belief_tracking.config import TrackerConfig
+from belief_tracking.errors import InitError, TrackingError
+from belief_tracking.evaluation import evaluate
+from belief_tracking.initiation import InitiationConfig, init_from_gt
+from belief_tracking.tracker import Tracker, diagnostic_columns
+from belief_tracking.weighting import WEIGHTINGS
 
 FUSIONS = tuple(WEIGHTINGS)
 
@@ -176,7 +176,7 @@ def test_every_fusion_strategy_tracks_and_reports_the_same_diagnostics_on_reques
 ])
 def test_only_the_active_strategy_runs_by_default(fusion, columns, monkeypatch):
     # The belief fusion and C's confidences run only for the strategy that uses them.
-    from plugins.video_tracking import adaptive, weighting
+    from belief_tracking import adaptive, weighting
 
     calls = []
     monkeypatch.setattr(weighting.BeliefWeighting, "fuse",

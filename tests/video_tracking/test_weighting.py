@@ -7,13 +7,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from plugins.video_tracking.cues import LocationConfig, LocationCue, Observation
-from plugins.video_tracking.errors import TrackingError
-from plugins.video_tracking.fusion import CueFusion, FusionConfig, cue_masses, relative_likelihoods
-from plugins.video_tracking.perspective import MAX_SCALE_CHANGE, PerspectiveScale
-from plugins.video_tracking.config import TrackerConfig
-from plugins.video_tracking.initiation import init_from_boxes
-from plugins.video_tracking.tracker import Tracker
+from belief_tracking.cues import LocationConfig, LocationCue, Observation
+from belief_tracking.errors import TrackingError
+from belief_tracking.fusion import CueFusion, FusionConfig, cue_masses, relative_likelihoods
+from belief_tracking.perspective import MAX_SCALE_CHANGE, PerspectiveScale
+from belief_tracking.config import TrackerConfig
+from belief_tracking.initiation import init_from_boxes
+from belief_tracking.tracker import Tracker
 
 log_likelihood_rows = st.lists(st.lists(st.floats(-50.0, 0.0), min_size=3, max_size=3), min_size=1, max_size=8)
 
