@@ -255,33 +255,55 @@ class Model:
 
     @classmethod
     def from_dict(cls, frame: Frame, data: Any) -> "Model":
-        """Inverse of :meth:`to_dict`; ``None`` gives the free model."""
+        """Inverse of :meth:`to_dict`; ``None`` gives the free model.
+
+        Every type accepts ``"empty"``: the listed propositions are constrained to be empty
+        on top of the type's own constraints.  ``free`` with ``empty`` is a hybrid model,
+        ``shafer`` with ``empty`` is Shafer's model in which those propositions are also
+        empty (a hypothesis that turned out impossible, as in dynamic fusion), and
+        ``"empty": []`` changes nothing.
+
+        >>> from belief import Frame
+        >>> frame = Frame(["a", "b", "c"])
+        >>> Model.from_dict(frame, {"type": "shafer", "empty": []}) == Model.shafer(frame)
+        True
+        >>> model = Model.from_dict(frame, {"type": "shafer", "empty": ["c"]})
+        >>> model.is_empty("c"), model.is_empty("a&b"), model.is_empty("a")
+        (True, True, False)
+        """
         if data is None:
             return cls.free(frame)
         if not isinstance(data, Mapping):
             raise FormatError(f"a model must be a JSON object with a \"type\", got {data!r}")
         kind = data.get("type", "free" if "empty" not in data else "hybrid")
-        accepted = {"type"} | {"hybrid": {"empty"}, "tracking": {"false_alarm"}}.get(kind, set())
+        if not isinstance(kind, str):
+            raise FormatError(f"a model's \"type\" must be a string, one of {', '.join(_KINDS)}; got {kind!r}")
+        accepted = {"type", "empty"} | ({"false_alarm"} if kind == "tracking" else set())
         unknown = set(data) - accepted
         if unknown and kind in _KINDS:
             raise FormatError(
                 f"key(s) {', '.join(sorted(map(str, unknown)))} do not belong to a {kind} model"
             )
+        empty = data.get("empty", [])
+        if isinstance(empty, str) or not isinstance(empty, list) or not all(isinstance(e, str) for e in empty):
+            raise FormatError("the \"empty\" of a model must be a list of proposition strings")
         if kind == "free":
-            return cls.free(frame)
-        if kind == "shafer":
-            return cls.shafer(frame)
-        if kind == "hybrid":
-            empty = data.get("empty", [])
-            if isinstance(empty, str) or not isinstance(empty, list) or not all(isinstance(e, str) for e in empty):
-                raise FormatError("the \"empty\" of a hybrid model must be a list of proposition strings")
+            base = cls.free(frame)
+        elif kind == "shafer":
+            base = cls.shafer(frame)
+        elif kind == "hybrid":
             return cls.hybrid(frame, empty)
-        if kind == "tracking":
+        elif kind == "tracking":
             fa = data.get("false_alarm", "FA")
             if not isinstance(fa, str):
                 raise FormatError("\"false_alarm\" must be a hypothesis name")
-            return cls.tracking(frame, fa)
-        raise FormatError(f"unknown model type {kind!r}; known types: {', '.join(_KINDS)}")
+            base = cls.tracking(frame, fa)
+        else:
+            raise FormatError(f"unknown model type {kind!r}; known types: {', '.join(_KINDS)}")
+        extra = cls.hybrid(frame, empty)
+        if all(base.is_forbidden(term) for term in extra.forbidden):
+            return base
+        return cls(frame, base.forbidden + extra.forbidden, kind="hybrid")
 
 
 def _restore_model(frame: Frame, forbidden: tuple[int, ...], kind: str, false_alarm: str | None) -> Model:

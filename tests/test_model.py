@@ -4,7 +4,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from belief import FormatError, Frame, Model, ModelError, UnknownHypothesisError
+from belief import FormatError, Frame, MassFunction, Model, ModelError, UnknownHypothesisError
 from tests.strategies import (
     ModelCase,
     any_model_cases,
@@ -274,11 +274,54 @@ def test_from_dict_errors_are_format_errors_naming_the_problem(data, fragment):
 
 
 @pytest.mark.parametrize("data", [
-    {"type": "free", "empty": ["a&b"]},
+    {"type": "free", "false_alarm": "a"},
     {"type": "shafer", "false_alarm": "a"},
     {"type": "hybrid", "empty": ["a&b"], "false_alarm": "a"},
-    {"type": "tracking", "false_alarm": "c", "empty": ["a&b"]},
+    {"type": "tracking", "false_alarm": "c", "colour": "red"},
 ])
 def test_model_keys_that_do_not_belong_to_the_type_are_refused(data):
     with pytest.raises(FormatError, match="do not belong"):
         Model.from_dict(Frame(["a", "b", "c"]), data)
+
+
+# -- "empty" with every model type ------------------------------------------------------------------
+@pytest.mark.parametrize("kind", ["free", "shafer", "hybrid", "tracking"])
+def test_an_empty_list_of_empty_propositions_changes_nothing(kind):
+    extra = {"false_alarm": "c"} if kind == "tracking" else {}
+    base = Model.from_dict(ABC, {"type": kind, **extra})
+    assert Model.from_dict(ABC, {"type": kind, "empty": [], **extra}) == base
+
+
+def test_free_with_empty_propositions_is_the_hybrid_model():
+    model = Model.from_dict(ABC, {"type": "free", "empty": ["a&b", "c"]})
+    assert model == Model.hybrid(ABC, ["a&b", "c"])
+
+
+def test_shafer_with_an_impossible_hypothesis_keeps_the_exclusions_and_drops_the_hypothesis():
+    # Dynamic fusion: Shafer's model on {a, b, c} in which c turns out impossible.
+    model = Model.from_dict(ABC, {"type": "shafer", "empty": ["c"]})
+    for proposition in ("a&b", "a&c", "b&c", "c"):
+        assert model.is_empty(proposition), proposition
+    for proposition in ("a", "b", "a|b", "a|c"):
+        assert not model.is_empty(proposition), proposition
+    assert model.is_refined_by(model) and Model.shafer(ABC).is_refined_by(model)
+    assert not model.is_refined_by(Model.shafer(ABC))
+    # It is written as the hybrid model it is, and read back equal.
+    assert Model.from_dict(ABC, model.to_dict()) == model
+    m = MassFunction({"a": 0.5, "a|c": 0.5}, frame=ABC, model=model)
+    assert m.bel("a") == pytest.approx(1.0)
+
+
+def test_shafer_with_empty_propositions_it_already_has_is_shafers_model():
+    assert Model.from_dict(ABC, {"type": "shafer", "empty": ["a&b", "b&c"]}) == Model.shafer(ABC)
+
+
+def test_tracking_with_empty_propositions_adds_them_to_the_false_alarm_exclusions():
+    model = Model.from_dict(ABC, {"type": "tracking", "false_alarm": "c", "empty": ["a&b"]})
+    assert model.is_empty("a&b") and model.is_empty("a&c") and model.is_empty("b&c")
+    assert not model.is_empty("a")
+
+
+def test_a_type_that_is_not_a_string_is_a_format_error():
+    with pytest.raises(FormatError, match="must be a string"):
+        Model.from_dict(ABC, {"type": ["x"]})
