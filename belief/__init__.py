@@ -34,6 +34,7 @@ from belief.lattice import HyperPowerSet, hyper_power_set
 from belief.mass import MassFunction
 from belief.model import Model
 from belief.rules import ENGINES, RULES, UnknownRuleError, combine, inconsistency, sequential
+from belief import extra_rules, representations  # importing extra_rules registers its rules in RULES
 
 __version__ = "0.1.0"
 
@@ -63,5 +64,7 @@ __all__ = [
     "inconsistency",
     "sequential",
     "hyper_power_set",
+    "extra_rules",
+    "representations",
     "__version__",
 ]

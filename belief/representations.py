@@ -180,8 +180,7 @@ def subset_element(model, index: int) -> Element:
     if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < 1 << n:
         raise InvalidMassError(f"a subset index of a frame of {n} hypotheses is an integer in [0, {(1 << n) - 1}], "
                                f"got {index!r}")
-    index = int(index)
-    return Element(model.frame, [1 << i for i in range(n) if index >> i & 1])
+    return _subset_elements(model.frame, (int(index),))[0]
 
 
 def _result(values: np.ndarray, model: Model, single: bool, what: str) -> Source:
@@ -209,11 +208,24 @@ def _result(values: np.ndarray, model: Model, single: bool, what: str) -> Source
     values = values / totals[:, None]
     columns = np.flatnonzero((values != 0).any(axis=0))
     columns = columns[np.argsort(_canonical_rank(len(model.frame))[columns], kind="stable")]
-    frame = model.frame
-    n = len(frame)
-    focal = [Element._make(frame, tuple(1 << i for i in range(n) if c >> i & 1)) for c in columns.tolist()]
+    focal = _subset_elements(model.frame, tuple(columns.tolist()))
     batch = MassBatch(focal, values[:, columns], model=model, subnormal=True, validate=False)
     return batch[0] if single else batch
+
+
+def _subset_elements(frame: Frame, masks: tuple[int, ...]) -> list[Element]:
+    """The elements of the given subset masks (from a cached table of all subsets on small frames)."""
+    n = len(frame)
+    if n <= 12:
+        table = _all_subsets(frame)
+        return [table[c] for c in masks]
+    return [Element(frame, [1 << i for i in range(n) if c >> i & 1]) for c in masks]
+
+
+@lru_cache(maxsize=64)
+def _all_subsets(frame: Frame) -> tuple[Element, ...]:
+    n = len(frame)
+    return tuple(Element(frame, [1 << i for i in range(n) if c >> i & 1]) for c in range(1 << n))
 
 
 @lru_cache(maxsize=32)
