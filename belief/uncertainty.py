@@ -345,7 +345,7 @@ def confusion(m: Source):
 #: The measures of :func:`uncertainty`, by name, in the order it lists them.
 MEASURES: dict[str, Callable] = {
     "nonspecificity": nonspecificity,
-    "deng_entropy": deng_entropy,
+    "deng": deng_entropy,
     "ambiguity": ambiguity,
     "discord": discord,
     "dissonance": dissonance,
@@ -353,7 +353,7 @@ MEASURES: dict[str, Callable] = {
 }
 
 #: The measures defined on power-set models only.
-POWER_SET_ONLY = ("deng_entropy", "ambiguity")
+POWER_SET_ONLY = ("deng", "ambiguity")
 
 
 def uncertainty(m: Source, measures: Sequence[str] | None = None) -> dict:
@@ -386,7 +386,7 @@ def uncertainty(m: Source, measures: Sequence[str] | None = None) -> dict:
     >>> for name, value in uncertainty(m).items():
     ...     print(f"{name:14} {value:.4f}")
     nonspecificity 0.6000
-    deng_entropy   2.2464
+    deng           2.2464
     ambiguity      0.9710
     discord        0.3533
     dissonance     0.0971
@@ -394,7 +394,7 @@ def uncertainty(m: Source, measures: Sequence[str] | None = None) -> dict:
     >>> free = MassFunction({"A|B": 1.0}, frame=["A", "B"])      # the free model: D^Θ is no power set
     >>> list(uncertainty(free))
     ['nonspecificity', 'discord', 'dissonance', 'confusion']
-    >>> uncertainty(free, ["deng_entropy"])   # doctest: +ELLIPSIS
+    >>> uncertainty(free, ["deng"])   # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
     belief.errors.UndefinedMeasureError: Deng's entropy is defined on power sets only (...), not on the free model; ...

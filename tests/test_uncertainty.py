@@ -49,7 +49,7 @@ def literal(name: str, mc: MassCase) -> float:
     assert all(m)                     # normal mass functions only
     if name == "nonspecificity":
         return sum(float(v) * math.log2(len(a)) for a, v in m.items())
-    if name == "deng_entropy":
+    if name == "deng":
         return -sum(float(v) * log2(v / (2 ** len(a) - 1)) for a, v in m.items())
     if name == "ambiguity":
         betp = [sum((v * Fraction(len(a & (hypothesis_regions(mc.case.n, i) & mc.case.allowed)), len(a))
@@ -71,7 +71,7 @@ def shannon(probabilities) -> float:
 
 
 ANY_MODEL = ["nonspecificity", "discord", "dissonance", "confusion"]
-POWER_SET = ["deng_entropy", "ambiguity"]
+POWER_SET = ["deng", "ambiguity"]
 
 
 # -- literature values ----------------------------------------------------------------------------------------
@@ -187,7 +187,7 @@ def test_measures_are_non_negative_and_ordered(mc):
     assert values["discord"] <= values["confusion"] + 1e-12
     if is_power_set_model(m.model):
         # 2^|A| - 1 ≥ |A|: Deng's entropy is at least the nonspecificity plus the Shannon entropy of m
-        assert values["deng_entropy"] >= values["nonspecificity"] + shannon(m.values) - 1e-12
+        assert values["deng"] >= values["nonspecificity"] + shannon(m.values) - 1e-12
     else:
         assert set(values) == set(ANY_MODEL)
 
@@ -294,7 +294,7 @@ def test_power_set_measures_are_refused_on_other_models(name, model):
 
 def test_unknown_measures_are_refused_with_the_known_names():
     m = MassFunction({"a": 1.0}, frame=["a", "b"], model="shafer")
-    with pytest.raises(UnknownMeasureError, match="known measures: nonspecificity, deng_entropy, ambiguity"):
+    with pytest.raises(UnknownMeasureError, match="known measures: nonspecificity, deng, ambiguity"):
         uncertainty(m, ["shannon"])
     assert uncertainty(m, "discord") == {"discord": 0.0}
     with pytest.raises(TypeError):
