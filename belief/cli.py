@@ -1,6 +1,7 @@
 """The ``belief`` command line.
 
-Subcommands: ``lattice``, ``measures``, ``transform``, ``combine``, ``rules`` and ``demo``.  Plugins add their own
+Subcommands: ``lattice``, ``measures``, ``transform``, ``combine``, ``rules``, ``decide``, ``distance``,
+``uncertainty``, ``plot`` and ``demo``.  Plugins add their own
 through the entry-point group ``belief.commands``: each entry point is a callable
 ``register(subparsers)`` that adds parsers to the sub-parser collection, and sets a
 ``func(args) -> int`` default on each.  The core never imports a plugin by name.
@@ -145,6 +146,30 @@ def _cmd_measures(args: argparse.Namespace) -> int:
 # -- transform ---------------------------------------------------------------------------------------
 def _cmd_transform(args: argparse.Namespace) -> int:
     m = _read_bba(args.bba)
+    if args.plausibility:
+        from belief.representations import plausibility_transform
+
+        for flag in ("normalized", "query"):
+            if getattr(args, flag):
+                raise CommandError(f"belief transform: error: --{flag} does not go with --plausibility")
+        probability = dict(zip(m.frame.hypotheses, plausibility_transform(m).tolist()))
+        if args.json:
+            _print_json({"probability": probability})
+        else:
+            print(_table(["hypothesis", "plausibility transform"], list(probability.items())))
+        return 0
+    if args.contextual_discount is not None:
+        from belief.representations import contextual_discount
+
+        for flag in ("normalized", "query"):
+            if getattr(args, flag):
+                raise CommandError(f"belief transform: error: --{flag} does not go with --contextual-discount")
+        rates = _read_json(args.contextual_discount, "discount-rates file")
+        if not isinstance(rates, dict):
+            raise FormatError(f"{args.contextual_discount}: the discount rates must be a JSON object mapping each "
+                              f"hypothesis to its rate α, got {type(rates).__name__}")
+        _print_mass(contextual_discount(m, rates), args.json)
+        return 0
     if args.pignistic or args.dsmp is not None:
         if args.normalized:
             raise CommandError("belief transform: error: --normalized goes with --condition")
@@ -212,6 +237,56 @@ def _cmd_rules(args: argparse.Namespace) -> int:
     return 0
 
 
+# -- decide, distance, uncertainty, plot -------------------------------------------------------------------
+def _cmd_decide(args: argparse.Namespace) -> int:
+    from belief.decisions import decide
+
+    m = _read_bba(args.bba)
+    options = {} if args.epsilon is None else {"epsilon": args.epsilon}
+    if args.epsilon is not None and args.criterion != "dsmp":
+        raise CommandError("belief decide: error: --epsilon goes with --criterion dsmp")
+    decision = decide(m, args.criterion, args.candidates or None, tol=args.tolerance, **options)
+    if args.json:
+        _print_json({"decision": list(decision.elements), "value": decision.value})
+    else:
+        tied = " (tied)" if len(decision.elements) > 1 else ""
+        print(f"{', '.join(decision.elements)}{tied}: {args.criterion} = {_fmt(decision.value)}")
+    return 0
+
+
+def _cmd_distance(args: argparse.Namespace) -> int:
+    from belief.distances import distance
+
+    first, second = _read_bba(args.first), _read_bba(args.second)
+    value = float(distance(first, second, kind=args.kind))
+    if args.json:
+        _print_json({"distance": value})
+    else:
+        print(f"{args.kind} distance: {_fmt(value)}")
+    return 0
+
+
+def _cmd_uncertainty(args: argparse.Namespace) -> int:
+    from belief.uncertainty import uncertainty
+
+    m = _read_bba(args.bba)
+    values = {name: float(value) for name, value in uncertainty(m, args.measure or None).items()}
+    if args.json:
+        _print_json(values)
+    else:
+        print(_table(["measure", "bits"], list(values.items())))
+    return 0
+
+
+def _cmd_plot(args: argparse.Namespace) -> int:
+    from belief.plot import plot_mass
+
+    m = _read_bba(args.bba)
+    plot_mass(m, args.out, title=args.title or args.bba)
+    print(f"wrote {args.out}")
+    return 0
+
+
 # -- demo ----------------------------------------------------------------------------------------------
 def _cmd_demo(args: argparse.Namespace) -> int:
     from belief.demo import run_demo
@@ -241,11 +316,12 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("measures", help="bel, pls, q and betp of propositions",
                        description="Belief, plausibility, commonality and pignistic probability.")
     p.add_argument("bba", metavar="BBA.json")
-    p.add_argument("--query", nargs="+", metavar="PROP", help="propositions (default: every focal element)")
+    p.add_argument("--query", nargs="+", action="extend", metavar="PROP",
+                   help="propositions (default: every focal element); --query A B and --query A --query B alike")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_measures)
 
-    p = sub.add_parser("transform", help="pignistic/DSmP probabilities, discounting, conditioning",
+    p = sub.add_parser("transform", help="pignistic/DSmP/plausibility probabilities, discounting, conditioning",
                        description="Probabilistic transformations and operations on one mass function.")
     p.add_argument("bba", metavar="BBA.json")
     how = p.add_mutually_exclusive_group(required=True)
@@ -253,8 +329,13 @@ def build_parser() -> argparse.ArgumentParser:
     how.add_argument("--dsmp", type=float, metavar="EPS", help="DSmP with the given ε")
     how.add_argument("--discount", type=float, metavar="ALPHA", help="Shafer discounting, α = reliability")
     how.add_argument("--condition", metavar="PROP", help="Dempster conditioning on PROP")
+    how.add_argument("--plausibility", action="store_true",
+                     help="plausibility transform: P(θ) ∝ Pls(θ) (Cobb and Shenoy)")
+    how.add_argument("--contextual-discount", metavar="RATES.json",
+                     help="contextual discounting: RATES.json maps each hypothesis θ to its rate α_θ")
     p.add_argument("--normalized", action="store_true", help="with --condition: remove m(∅) and rescale")
-    p.add_argument("--query", nargs="+", metavar="PROP", help="extra propositions for --pignistic/--dsmp")
+    p.add_argument("--query", nargs="+", action="extend", metavar="PROP",
+                   help="extra propositions for --pignistic/--dsmp")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_transform)
 
@@ -270,6 +351,48 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("rules", help="list the combination rules", description="List the combination rules.")
     p.set_defaults(func=_cmd_rules)
+
+    p = sub.add_parser("decide", help="the hypothesis (or candidate) of largest Bel, Pls, BetP or DSmP",
+                       description="Decide: the singleton (or given candidate) maximising a criterion; ties are "
+                                   "all listed.")
+    p.add_argument("bba", metavar="BBA.json")
+    p.add_argument("--criterion", choices=["betp", "bel", "pls", "dsmp"], default="betp",
+                   help="what to maximise (default betp)")
+    p.add_argument("--candidates", nargs="+", action="extend", metavar="PROP",
+                   help="propositions to choose among (default: the hypotheses)")
+    p.add_argument("--epsilon", type=float, metavar="EPS", help="ε of DSmP (default 0.001)")
+    p.add_argument("--tolerance", type=float, default=1e-9, metavar="TOL",
+                   help="values within TOL of the largest are tied (default 1e-9)")
+    p.add_argument("--json", action="store_true", help='print {"decision": [...], "value": x}')
+    p.set_defaults(func=_cmd_decide)
+
+    from belief.distances import DISTANCES
+
+    p = sub.add_parser("distance", help="the distance between two mass functions",
+                       description="The distance between two mass functions under the same model.")
+    p.add_argument("first", metavar="A.json")
+    p.add_argument("second", metavar="B.json")
+    p.add_argument("--kind", choices=list(DISTANCES), default="jousselme",
+                   help="which distance (default jousselme)")
+    p.add_argument("--json", action="store_true", help='print {"distance": x}')
+    p.set_defaults(func=_cmd_distance)
+
+    p = sub.add_parser("uncertainty", help="nonspecificity, Deng's entropy and other uncertainty measures",
+                       description="Uncertainty measures of one mass function, in bits: every measure "
+                                   "defined under its model, or those named.")
+    p.add_argument("bba", metavar="BBA.json")
+    p.add_argument("--measure", nargs="+", action="extend", metavar="NAME",
+                   help="only these measures (default: every measure defined under the model)")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=_cmd_uncertainty)
+
+    p = sub.add_parser("plot", help="draw a mass function (needs the plot extra)",
+                       description="Draw the masses, the Bel/BetP/Pls interval of every hypothesis and, for "
+                                   "up to four hypotheses, the Hasse diagram of the focal elements.")
+    p.add_argument("bba", metavar="BBA.json")
+    p.add_argument("--out", required=True, metavar="FIG.png", help="the picture to write (.png, .pdf, .svg, …)")
+    p.add_argument("--title", help="a title (default: the file name)")
+    p.set_defaults(func=_cmd_plot)
 
     p = sub.add_parser("demo", help="a short demonstration on embedded data",
                        description="Fuse the evidence of an embedded example and print the results.")
