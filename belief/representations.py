@@ -525,7 +525,7 @@ def conjunctive_weights(m: Source) -> np.ndarray:
 
     w(A) = Π_{B⊇A} q(B)^{(-1)^{|B|-|A|+1}} for A ≠ Θ, so that m is the conjunctive combination
     of the (generalised) simple mass functions A^{w(A)}, which give 1 - w(A) to A and w(A) to Θ:
-    m = ∩_{A⊂Θ} A^{w(A)} (Smets 1995; Denœux 2008, eq. (12)).  w(∅) is included (it is not 1
+    m = ∩_{A⊂Θ} A^{w(A)} (Smets 1995; Denœux 2008).  w(∅) is included (it is not 1
     in general, even for a normal m).  Weights above 1 are allowed: A^w is then not a mass
     function, but the combination is.  By convention w(Θ) = 1 (Θ^w is vacuous for every w).
 
@@ -596,7 +596,7 @@ def from_conjunctive_weights(w, model) -> Source:
 
 
 def disjunctive_weights(m: Source) -> np.ndarray:
-    """The disjunctive weights v(A), A ≠ ∅, of a subnormal m (Denœux 2008, section 5).
+    """The disjunctive weights v(A), A ≠ ∅, of a subnormal m (Denœux 2008).
 
     v(A) = Π_{B⊆A} b(B)^{(-1)^{|A|-|B|+1}} for A ≠ ∅, so that m is the disjunctive combination
     of the negative simple mass functions A_{v(A)}, which give v(A) to ∅ and 1 - v(A) to A:
@@ -677,7 +677,7 @@ def plausibility_transform(m: Source) -> np.ndarray:
     (under the free model every hypothesis meets every non-empty element).  m(∅) does not
     count in Pls, so a subnormal m has the transform of its normalisation.  On Shafer's
     model the transform commutes with Dempster's rule: the transform of m1 ⊕ m2 is the
-    normalised product of the transforms (Cobb & Shenoy 2006, Theorem 3.1).
+    normalised product of the transforms (Cobb & Shenoy 2006).
 
     Parameters
     ----------

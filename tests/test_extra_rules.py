@@ -200,7 +200,7 @@ def test_the_command_line_lists_and_uses_the_rules(capsys, tmp_path):
 
 
 def test_cautious_rule_of_separable_mass_functions():
-    # Denœux (2008), section 4: for m1 = ∩ A^{w1(A)} and m2 = ∩ A^{w2(A)}, the cautious combination is
+    # Denœux (2008): for m1 = ∩ A^{w1(A)} and m2 = ∩ A^{w2(A)}, the cautious combination is
     # ∩ A^{min(w1(A), w2(A))}.  m1 = {a}^.4 ∩ {a,b}^.5 = {a: .6, a∪b: .2, Θ: .2};
     # m2 = {a}^.6 ∩ {b,c}^.3 = {∅: .28, a: .12, b∪c: .42, Θ: .18};
     # result {a}^.4 ∩ {a,b}^.5 ∩ {b,c}^.3 = m1 ∩ {b,c}^.3 = {∅: .42, a: .18, b: .14, a∪b: .06, b∪c: .14, Θ: .06}.
@@ -224,7 +224,7 @@ def test_cautious_rule_is_not_the_conjunctive_rule_on_one_piece_of_evidence_seen
 
 
 def test_bold_rule_by_hand():
-    # Denœux (2008), section 5: {a}_.6 ∪ {b}_.5 and {a}_.8 ∪ {b}_.2 (A_v: v on ∅, 1 - v on A) give
+    # Denœux (2008), the dual rule: {a}_.6 ∪ {b}_.5 and {a}_.8 ∪ {b}_.2 (A_v: v on ∅, 1 - v on A) give
     # {a}_.6 ∪ {b}_.2 = {∅: .12, a: .4·.2, b: .6·.8, a∪b: .4·.8}.
     m1 = MassFunction({"empty": 0.3, "a": 0.2, "b": 0.3, "a|b": 0.2}, model=Model.shafer(Frame(["a", "b"])),
                       subnormal=True)
@@ -338,7 +338,7 @@ def test_cautious_and_bold_are_idempotent_commutative_and_associative(rule, opti
 @settings(max_examples=25)
 @given(sources=subset_mass_lists(min_sources=2, max_sources=2, max_n=3, total=True, empty=True))
 def test_cautious_is_more_committed_than_each_source(sources):
-    # Denœux (2008), Proposition 3: m1 ∧ m2 is w-more committed than m1 and m2, so its commonality is at most
+    # Denœux (2008): m1 ∧ m2 is w-more committed than m1 and m2, so its commonality is at most
     # theirs (q-ordering follows from the w-ordering).
     from belief.representations import commonality, conjunctive_weights
 

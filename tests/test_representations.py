@@ -4,7 +4,7 @@ A slow literal reference works on exact masses (Fractions) keyed by subset bit m
 every subset straight from the definitions:
 
     b(A) = Σ_{B⊆A} m(B)                      q(A) = Σ_{B⊇A} m(B)
-    w(A) = Π_{B⊇A} q(B)^{(-1)^{|B|-|A|+1}}   (A ≠ Θ; Denœux 2008, eq. (12); w(Θ) = 1 by convention)
+    w(A) = Π_{B⊇A} q(B)^{(-1)^{|B|-|A|+1}}   (A ≠ Θ; Denœux 2008; w(Θ) = 1 by convention)
     v(A) = Π_{B⊆A} b(B)^{(-1)^{|A|-|B|+1}}   (A ≠ ∅; v(∅) = 1 by convention)
 
 The exponents are ±1, so the weights are exact rationals too.  The decompositions are checked
@@ -193,13 +193,13 @@ def test_conjunctive_weights_of_a_normal_mass_function_by_hand():
 
 
 def test_separable_mass_functions_give_back_their_weights():
-    # Denœux 2008, section 3: A^{w} gives 1 - w to A and w to Θ; {a}^.4 ∩ {a,b}^.5 = {a: .6, a∪b: .2, Θ: .2},
+    # Denœux 2008: A^{w} gives 1 - w to A and w to Θ; {a}^.4 ∩ {a,b}^.5 = {a: .6, a∪b: .2, Θ: .2},
     # whose weights are .4 on {a}, .5 on {a, b} and 1 elsewhere (∅ included).
     m = MassFunction({"a": 0.6, "a|b": 0.2, "a|b|c": 0.2}, model=SHAFER_ABC)
     expected = np.ones(8)
     expected[[1, 3]] = [0.4, 0.5]
     assert close(conjunctive_weights(m), expected)
-    # Dually (Denœux 2008, section 5), {a}_.6 ∪ {b}_.5 = {∅: .3, a: .2, b: .3, a∪b: .2} has v(a) = .6, v(b) = .5.
+    # Dually (Denœux 2008), {a}_.6 ∪ {b}_.5 = {∅: .3, a: .2, b: .3, a∪b: .2} has v(a) = .6, v(b) = .5.
     m = MassFunction({"empty": 0.3, "a": 0.2, "b": 0.3, "a|b": 0.2}, model=SHAFER_AB, subnormal=True)
     assert close(disjunctive_weights(m), [1.0, 0.6, 0.5, 1.0])
     exact = {0: Fraction(3, 10), 1: Fraction(1, 5), 2: Fraction(3, 10), 3: Fraction(1, 5)}
@@ -207,7 +207,7 @@ def test_separable_mass_functions_give_back_their_weights():
 
 
 def test_the_disjunctive_weights_are_the_conjunctive_weights_of_the_negation():
-    # Denœux 2008, section 5: v(A) = w̄(Θ \ A), where m̄(A) = m(Θ \ A) (hand-picked m, and the reference).
+    # Denœux 2008: v(A) = w̄(Θ \ A), where m̄(A) = m(Θ \ A) (hand-picked m, and the reference).
     m = MassFunction({"empty": 0.2, "a": 0.1, "b|c": 0.3, "a|c": 0.4}, model=SHAFER_ABC, subnormal=True)
     negation = MassFunction({"a|b|c": 0.2, "b|c": 0.1, "a": 0.3, "b": 0.4}, model=SHAFER_ABC)
     v, w_bar = disjunctive_weights(m), conjunctive_weights(negation)
@@ -366,7 +366,7 @@ def test_contextual_discounting_is_the_disjunctive_combination_with_the_contexts
 @settings(max_examples=40)
 @given(pair=subset_mass_lists(min_sources=2, max_sources=2, max_n=4, empty=False))
 def test_the_plausibility_transform_commutes_with_dempsters_rule(pair):
-    # Cobb & Shenoy (2006), Theorem 3.1: Pl_P(m1 ⊕ m2) = Pl_P(m1) ⊗ Pl_P(m2) (normalised product).
+    # Cobb & Shenoy (2006): Pl_P(m1 ⊕ m2) = Pl_P(m1) ⊗ Pl_P(m2) (normalised product).
     m1, m2 = (sm.build() for sm in pair)
     exact1, exact2 = (sm.exact() for sm in pair)
     n = pair[0].n
