@@ -193,7 +193,8 @@ def check_masses(values: np.ndarray, focal: Sequence[Element], model: Model, sub
             if model.is_empty(element):
                 rows = np.flatnonzero(values[:, col] > 0)
                 if rows.size:
-                    what = "the empty set" if element.is_empty else f"{element}, which is empty under the {model.kind} model"
+                    what = ("the empty set" if element.is_empty
+                            else f"{element}, which is empty under the {model.kind} model")
                     label = where(int(rows[0]))
                     raise InvalidMassError(
                         f"mass {float(values[rows[0], col])!r} {label + ' ' if label else ''}on {what}; "

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterable, Iterator, Sequence
+from functools import lru_cache
 from typing import Union
 
 from belief.errors import FrameError, ParseError, UnknownHypothesisError
@@ -39,6 +40,12 @@ def term_key(term: int) -> tuple[int, ...]:
     [3, 6, 4]
     """
     return tuple(_bits(term))
+
+
+@lru_cache(maxsize=1 << 16)
+def _term_order(term: int) -> tuple[int, tuple[int, ...]]:
+    """A conjunction's part of :attr:`Element.sort_key`: its size, then :func:`term_key`."""
+    return term.bit_count(), tuple(_bits(term))
 
 
 def reduce_terms(terms: Iterable[int]) -> tuple[int, ...]:
@@ -244,6 +251,11 @@ class Frame:
         >>> Frame(["a", "b", "c"]).plain_terms("(a|b)&c") is None
         True
         """
+        parsed = self._plain(text)
+        return None if parsed is None else parsed[0]
+
+    def _plain(self, text: str) -> tuple[tuple[int, ...], bool] | None:
+        """:meth:`plain_terms`, and whether every conjunction is a single hypothesis."""
         if "(" in text or "∩" in text or "∪" in text or "∅" in text:
             return None
         bit = self._bit
@@ -272,8 +284,8 @@ class Frame:
             # Single hypotheses cannot absorb one another, and their masks sort in frame order.
             if len(terms) > 1:
                 terms = sorted(set(terms))
-            return tuple(terms)
-        return reduce_terms(terms)
+            return tuple(terms), True
+        return reduce_terms(terms), False
 
     def term_name(self, term: int, style: str = "ascii") -> str:
         """Name of one conjunction mask, e.g. ``a&b``."""
@@ -447,7 +459,7 @@ class Element(_ElementSlots):
         """
         key = self._key
         if key is None:
-            key = (len(self.terms), tuple((t.bit_count(), term_key(t)) for t in self.terms))
+            key = (len(self.terms), tuple(map(_term_order, self.terms)))
             object.__setattr__(self, "_key", key)
         return key
 

@@ -18,6 +18,7 @@ from belief.batch import SUM_TOLERANCE, MassBatch, check_masses, resolve_model
 from belief.errors import FormatError, InvalidMassError
 from belief.frame import Element, Frame, make_elements
 from belief.model import Model
+from belief.plan import RANK_TABLE_WIDTH, union_elements, union_ranks
 
 __all__ = ["MassFunction"]
 
@@ -59,19 +60,77 @@ class MassFunction(Mapping):
     0.8
     """
 
-    __slots__ = ("model", "focal", "values", "_batch", "_hash")
+    __slots__ = ("model", "_focal", "_values", "_batch", "_hash", "_masks", "_floats")
 
     model: Model
-    focal: tuple[Element, ...]
-    values: np.ndarray
 
     def __init__(self, masses: Mapping[Query, float], frame=None, model=None, *,
                  subnormal: bool = False) -> None:
-        if not isinstance(masses, Mapping):
+        if type(masses) is not dict and not isinstance(masses, Mapping):
             raise InvalidMassError(f"masses must be a mapping of propositions to numbers, got {type(masses).__name__}")
-        model = resolve_model(frame, model)
-        if not self._plain_init(masses, model):
+        if frame is not None or type(model) is not Model:
+            model = resolve_model(frame, model)
+        context = model._unions
+        if context is None:
+            context = _union_context(model)
+        if not ((context and self._union_init(masses, model, context)) or self._plain_init(masses, model)):
             self._checked_init(masses, model, subnormal)
+
+    def _union_init(self, masses: Mapping[Query, float], model: Model, context: tuple) -> bool:
+        """Build from a mapping of unions of hypotheses (``"a|c"``), kept as bit masks; False otherwise.
+
+        The elements are made when :attr:`focal` is first read, and the array of masses
+        when :attr:`values` is: a combination of such mass functions works on the masks
+        and the floats alone (see :func:`belief.rules.combine`), and one of a few focal
+        elements costs less than making either.  Intersections, element keys, and
+        anything :meth:`_plain_init` would refuse give False before anything is set.
+        """
+        get, bit, rank = context
+        keys = list(masses)
+        try:
+            masks = [sum(map(get, key.split("|"))) for key in keys]
+        except (KeyError, AttributeError):
+            # A name with spaces around it; anything else (an operator other than "|", "empty",
+            # a key that is not a string) fails the look-up of a name again.
+            masks = []
+            for key in keys:
+                if type(key) is not str:
+                    return False
+                mask = 0
+                for part in key.split("|"):
+                    b = bit.get(part.strip())
+                    if b is None:
+                        return False
+                    mask += b
+                masks.append(mask)
+        # A hypothesis named twice in a key, or two keys for one element, go the general way.
+        for m, key in zip(masks, keys):
+            if m.bit_count() != key.count("|") + 1:
+                return False
+        if len(set(masks)) != len(masks):
+            return False
+        values = list(masses.values())
+        for v in values:
+            if type(v) is not float:
+                if not all(type(x) is not bool and isinstance(x, _NUMBERS) for x in values):
+                    return False
+                values = [float(x) for x in values]
+                break
+        # NaN and ±inf make the sum NaN or infinite; a negative mass fails min().
+        if not values or not min(values) >= 0.0 or not abs(math.fsum(values) - 1.0) <= SUM_TOLERANCE:
+            return False
+        items = sorted(zip([rank[m] for m in masks], masks, values))
+        if 0.0 in values:
+            items = [item for item in items if item[2] > 0.0]
+        _, masks, values = zip(*items)
+        object.__setattr__(self, "model", model)
+        object.__setattr__(self, "_focal", None)
+        object.__setattr__(self, "_values", None)
+        object.__setattr__(self, "_batch", None)
+        object.__setattr__(self, "_hash", None)
+        object.__setattr__(self, "_masks", masks)
+        object.__setattr__(self, "_floats", values)
+        return True
 
     def _plain_init(self, masses: Mapping[Query, float], model: Model) -> bool:
         """Build from a mapping that needs no merging, no ∅ and no error, in one pass; False otherwise.
@@ -84,19 +143,21 @@ class MassFunction(Mapping):
         :meth:`_checked_init` then builds the mass function or raises the error.
         """
         frame = model.frame
-        plain = frame.plain_terms
+        plain = frame._plain
         shafer = model.kind == "shafer"
-        forbidden = model.forbidden and not shafer
+        forbidden = bool(model.forbidden) and not shafer
         seen: set[tuple[int, ...]] = set()
         items = []
-        single = True
+        single = True                   # every conjunction a single hypothesis
         for key, value in masses.items():
             if type(key) is str:
-                terms = plain(key)
-                if terms is None:
+                parsed = plain(key)
+                if parsed is None:
                     return False
+                terms, simple = parsed
             elif isinstance(key, Element) and key.frame == frame:
                 terms = key.terms
+                simple = all(not t & (t - 1) for t in terms)
             else:
                 return False
             if type(value) is not float:
@@ -105,23 +166,17 @@ class MassFunction(Mapping):
                 value = float(value)
             if not 0.0 <= value < math.inf:
                 return False
-            if shafer:
-                if len(terms) == 1:
-                    if terms[0] & (terms[0] - 1):
-                        return False
-                else:
+            if not simple:
+                if shafer:
                     terms = tuple(t for t in terms if not t & (t - 1))
-            elif forbidden:
+                else:
+                    single = False
+            if forbidden:
                 terms = model.kept_terms(terms)
             if not terms or terms in seen:
                 return False
             seen.add(terms)
             if value > 0.0:
-                if single and not shafer:
-                    for t in terms:
-                        if t & (t - 1):
-                            single = False
-                            break
                 items.append((terms, value))
         if not items or abs(math.fsum([v for _, v in items]) - 1.0) > SUM_TOLERANCE:
             return False
@@ -137,10 +192,12 @@ class MassFunction(Mapping):
         values = np.array([v for _, v in items], dtype=np.float64)
         values.flags.writeable = False
         object.__setattr__(self, "model", model)
-        object.__setattr__(self, "focal", focal)
-        object.__setattr__(self, "values", values)
+        object.__setattr__(self, "_focal", focal)
+        object.__setattr__(self, "_values", values)
         object.__setattr__(self, "_batch", None)
         object.__setattr__(self, "_hash", None)
+        object.__setattr__(self, "_masks", None)
+        object.__setattr__(self, "_floats", None)
         return True
 
     def _checked_init(self, masses: Mapping[Query, float], model: Model, subnormal: bool) -> None:
@@ -171,16 +228,83 @@ class MassFunction(Mapping):
         values = np.array(values, dtype=np.float64)
         values.flags.writeable = False
         object.__setattr__(self, "model", model)
-        object.__setattr__(self, "focal", focal)
-        object.__setattr__(self, "values", values)
+        object.__setattr__(self, "_focal", focal)
+        object.__setattr__(self, "_values", values)
         object.__setattr__(self, "_batch", None)
         object.__setattr__(self, "_hash", None)
+        object.__setattr__(self, "_masks", None)
+        object.__setattr__(self, "_floats", None)
 
     @classmethod
     def _trusted(cls, model: Model, focal: tuple[Element, ...], values) -> "MassFunction":
         obj = object.__new__(cls)
         obj._init(model, focal, values)
         return obj
+
+    @classmethod
+    def _from_masks(cls, model: Model, masks: tuple[int, ...], values) -> "MassFunction":
+        """Wrap unions of hypotheses (bit masks, 0 for ∅) in canonical order and their masses, without copying.
+
+        ``values`` is a tuple of floats, or a fresh array that nothing else holds.
+        """
+        obj = object.__new__(cls)
+        object.__setattr__(obj, "model", model)
+        object.__setattr__(obj, "_focal", None)
+        if type(values) is tuple:
+            object.__setattr__(obj, "_values", None)
+            object.__setattr__(obj, "_floats", values)
+        else:
+            values.flags.writeable = False
+            object.__setattr__(obj, "_values", values)
+            object.__setattr__(obj, "_floats", None)
+        object.__setattr__(obj, "_batch", None)
+        object.__setattr__(obj, "_hash", None)
+        object.__setattr__(obj, "_masks", masks)
+        return obj
+
+    @property
+    def focal(self) -> tuple[Element, ...]:
+        """The focal elements, in canonical order (:attr:`Element.sort_key`)."""
+        focal = self._focal
+        if focal is None:
+            focal = tuple(union_elements(self.model.frame, self._masks))
+            object.__setattr__(self, "_focal", focal)
+        return focal
+
+    @property
+    def values(self) -> np.ndarray:
+        """The masses of the focal elements, in their order (a read-only array)."""
+        values = self._values
+        if values is None:
+            values = np.array(self._floats, dtype=np.float64)
+            values.flags.writeable = False
+            object.__setattr__(self, "_values", values)
+        return values
+
+    def _union_masks(self) -> tuple[int, ...] | None:
+        """The focal elements as hypothesis bit masks, if every one is a union of hypotheses (or ∅)."""
+        masks = self._masks
+        if masks is None:
+            out = []
+            for x in self._focal:
+                terms = x.terms
+                mask = 0
+                for t in terms:
+                    if t & (t - 1):
+                        return None
+                    mask |= t
+                out.append(mask)
+            masks = tuple(out)
+            object.__setattr__(self, "_masks", masks)
+        return masks
+
+    def _union_floats(self) -> tuple[float, ...]:
+        """The masses as a tuple of floats."""
+        floats = self._floats
+        if floats is None:
+            floats = tuple(self._values.tolist())
+            object.__setattr__(self, "_floats", floats)
+        return floats
 
     def __setattr__(self, name: str, value: object) -> None:
         raise AttributeError("MassFunction is immutable")
@@ -231,7 +355,7 @@ class MassFunction(Mapping):
         return iter(self.focal)
 
     def __len__(self) -> int:
-        return len(self.focal)
+        return len(self._masks if self._focal is None else self._focal)
 
     def __contains__(self, key: object) -> bool:
         if not isinstance(key, (str, Element)):
@@ -446,6 +570,26 @@ class MassFunction(Mapping):
         except json.JSONDecodeError as exc:
             raise FormatError(f"not valid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}") from None
         return cls.from_dict(data)
+
+
+_NUMBERS = (int, float, np.integer, np.floating)
+
+
+def _union_context(model: Model) -> tuple | bool:
+    """What :meth:`MassFunction._union_init` needs of a model, kept on it: or False where it does not apply.
+
+    It applies to frames of up to :data:`~belief.plan.RANK_TABLE_WIDTH` hypotheses whose
+    model declares no hypothesis empty on its own (a union of hypotheses is then its own
+    form under the model).
+    """
+    frame = model.frame
+    n = len(frame)
+    if n > RANK_TABLE_WIDTH or any(f & (f - 1) == 0 for f in model.forbidden):
+        context = False
+    else:
+        context = (frame._bit.__getitem__, frame._bit, union_ranks(n)[2])
+    model._unions = context
+    return context
 
 
 def _plain_key(item: tuple[tuple[int, ...], float]) -> tuple:

@@ -50,7 +50,7 @@ class Model:
     (3, 7)
     """
 
-    __slots__ = ("frame", "kind", "forbidden", "false_alarm", "_hash")
+    __slots__ = ("frame", "kind", "forbidden", "false_alarm", "_hash", "_unions")
 
     def __init__(self, frame: Frame, forbidden: Iterable[int] = (), *, kind: str = "hybrid",
                  false_alarm: str | None = None) -> None:
@@ -68,6 +68,7 @@ class Model:
         self.forbidden = reduce_terms(terms)
         self.false_alarm = false_alarm
         self._hash = hash(("belief.Model", frame, self.forbidden))
+        self._unions = None             # what MassFunction needs to read unions of hypotheses (filled there)
 
     # -- constructors ------------------------------------------------------------------
     @classmethod

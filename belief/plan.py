@@ -9,6 +9,13 @@ numpy operations:
 * ``products`` gathers the masses of each tuple and multiplies them, shape (N, T);
 * a :class:`Scatter` adds contributions that go to the same result element with one
   ``np.add.reduceat`` over contributions sorted by target.
+
+Compiling pays when the same focal elements come back (a tracker, a repeated fusion).  A
+combination of focal elements seen for the first time is evaluated directly instead
+(:mod:`belief.rules`), on integer codes of its focal elements (:func:`encode`): there ∩ and
+∪ are ``&`` and ``|``, so the tuples' results cost a few numpy operations (or a loop over
+a few dozen tuples) and no element is built per tuple.  :func:`plan_lookup` and
+:func:`sighted` tell which way a call goes.
 """
 
 from __future__ import annotations
@@ -16,18 +23,28 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
+from typing import NamedTuple
 
 import numpy as np
 
-from belief.frame import Element
+from belief.frame import Element, Frame, make_elements
 from belief.model import Model
 
-__all__ = ["TuplePlan", "Scatter", "FocalKey", "tuple_plan", "MAX_TUPLES"]
+__all__ = ["TuplePlan", "Scatter", "FocalKey", "tuple_plan", "MAX_TUPLES", "Encoding", "encode", "coded_table",
+           "canonical_codes", "plan_lookup", "sighted", "mask_terms", "union_ranks", "union_elements",
+           "RANK_TABLE_WIDTH"]
 
 #: Refuse joint combinations with more focal-element tuples than this.
 MAX_TUPLES = 20_000_000
 #: Rows are processed in chunks of about this many (row × tuple) entries, to bound memory.
 CHUNK_ENTRIES = 1 << 18
+#: Models that allow more Venn regions than this get no region codes (:func:`encode`).
+REGION_LIMIT = 1 << 12
+#: Frames of at most this many hypotheses get a table of the canonical order of their unions (:func:`union_ranks`).
+RANK_TABLE_WIDTH = 16
+#: How many compiled plans are kept, and how many lists of focal elements are remembered as seen.
+PLAN_CACHE_SIZE = 512
+SIGHTINGS_SIZE = 4096
 
 
 class Scatter:
@@ -60,20 +77,31 @@ class Scatter:
         scatter._build(list(unique), np.asarray(codes, dtype=np.int64))
         return scatter
 
+    @classmethod
+    def from_ranks(cls, ordered: Sequence[Element], ranks: np.ndarray) -> "Scatter":
+        """Build from distinct elements already in canonical order and, per contribution, its target's position."""
+        scatter = object.__new__(cls)
+        scatter._finish(list(ordered), np.asarray(ranks, dtype=np.int64))
+        return scatter
+
     def _build(self, unique: list[Element], codes: np.ndarray) -> None:
         keys = [e.sort_key for e in unique]
         rank_of = sorted(range(len(unique)), key=keys.__getitem__)
         rank = np.empty(len(unique), dtype=np.int64)
         rank[rank_of] = np.arange(len(unique))
-        ranked = rank[codes] if len(codes) else codes
+        self._finish([unique[r] for r in rank_of], rank[codes] if len(codes) else codes)
+
+    def _finish(self, ordered: list[Element], ranked: np.ndarray) -> None:
+        unique = ordered
         if len(unique) < 1 << 16:
             # Small integer keys sort by radix in linear time.
             ranked = ranked.astype(np.uint16 if len(unique) >= 1 << 8 else np.uint8)
         order = np.argsort(ranked, kind="stable")
         sorted_codes = ranked[order]
         starts = (np.flatnonzero(np.r_[True, sorted_codes[1:] != sorted_codes[:-1]])
-                  if len(codes) else np.zeros(0, np.int64))
-        self.elements = tuple(unique[rank_of[r]] for r in sorted_codes[starts].tolist())
+                  if len(ranked) else np.zeros(0, np.int64))
+        present = sorted_codes[starts].tolist()
+        self.elements = tuple(unique) if len(present) == len(unique) else tuple(unique[r] for r in present)
         self.order = order
         self.starts = starts
 
@@ -152,9 +180,9 @@ class TuplePlan:
         return [unique[c] for c in codes.tolist()]
 
     def _fold(self, op, ufunc) -> tuple[list[Element], np.ndarray]:
-        fast = self._fold_exclusive(ufunc)
-        if fast is not None:
-            return fast
+        coded = coded_table(self.model, self.projected, ufunc)
+        if coded is not None:
+            return coded
         # Fold source by source, caching partial results per prefix of the tuple.
         model = self.model
         partial: dict[tuple[int, ...], Element] = {(i,): x for i, x in enumerate(self.projected[0])}
@@ -168,34 +196,6 @@ class TuplePlan:
         codes = np.fromiter((unique.setdefault(partial[t], len(unique)) for t in self.tuples),
                             dtype=np.int64, count=self.count)
         return list(unique), codes
-
-    def _fold_exclusive(self, ufunc) -> tuple[list[Element], np.ndarray] | None:
-        """Vectorised fold when every element is a union of hypotheses that exclude one another.
-
-        Under Shafer's model (or any model that forbids every pair of the hypotheses the
-        focal elements use) an element is just the set of its hypotheses, so ∩ and ∪ are
-        bitwise AND and OR of one 64-bit mask per element.
-        """
-        n = len(self.model.frame)
-        if n > 63 or self.count < 64:
-            return None
-        used = 0
-        for elements in self.projected:
-            for x in elements:
-                if any(t & (t - 1) for t in x.terms):
-                    return None
-                used |= x.hypotheses
-        bits = [i for i in range(n) if used >> i & 1]
-        if not all(self.model.is_forbidden((1 << i) | (1 << j)) for a, i in enumerate(bits) for j in bits[a + 1:]):
-            return None
-        masks = [np.array([x.hypotheses for x in elements], dtype=np.uint64) for elements in self.projected]
-        combined = masks[0][self.columns[0]]
-        for m, c in zip(masks[1:], self.columns[1:]):
-            combined = ufunc(combined, m[c])
-        unique, inverse = np.unique(combined, return_inverse=True)
-        frame = self.model.frame
-        elements = [_union_of(frame, u) for u in unique.tolist()]
-        return elements, inverse.reshape(-1).astype(np.int64)
 
     @cached_property
     def conflicting(self) -> np.ndarray:
@@ -219,12 +219,6 @@ def gather_product(values: Sequence[np.ndarray], columns: Sequence[np.ndarray]) 
     return result
 
 
-@lru_cache(maxsize=1 << 16)
-def _union_of(frame, mask: int) -> Element:
-    """The union of the hypotheses in ``mask`` (cached: exclusive models reuse few elements)."""
-    return Element._make(frame, tuple(1 << i for i in range(mask.bit_length()) if mask >> i & 1))
-
-
 class FocalKey:
     """A hashable stand-in for a tuple of focal elements, hashed once (plans are looked up by it)."""
 
@@ -246,12 +240,287 @@ class FocalKey:
 def tuple_plan(source_model: Model, model: Model, focal) -> TuplePlan:
     """The cached :class:`TuplePlan` of these focal-element lists (tuples of elements or :class:`FocalKey`)."""
     keys = tuple(f if isinstance(f, FocalKey) else FocalKey(tuple(f)) for f in focal)
-    return _cached_plan(source_model, model, keys)
+    key = (source_model, model, keys)
+    plan = _PLANS.pop(key, None)
+    if plan is None:
+        plan = TuplePlan(source_model, model, tuple(k.focal for k in keys))
+        if len(_PLANS) >= PLAN_CACHE_SIZE:
+            del _PLANS[next(iter(_PLANS))]
+    _PLANS[key] = plan                       # most recently used last
+    return plan
 
 
-@lru_cache(maxsize=512)
-def _cached_plan(source_model: Model, model: Model, keys: tuple[FocalKey, ...]) -> TuplePlan:
-    return TuplePlan(source_model, model, tuple(k.focal for k in keys))
+def plan_lookup(source_model: Model, model: Model, keys: tuple[FocalKey, ...]) -> TuplePlan | None:
+    """The cached plan of these focal lists, or None: nothing is compiled or recorded."""
+    return _PLANS.get((source_model, model, keys))
+
+
+def sighted(source_model: Model, model: Model, keys: tuple[FocalKey, ...], purpose: str = "") -> bool:
+    """Whether these focal lists were met before under these models for ``purpose``; the first call records them."""
+    key = (source_model, model, keys, purpose)
+    if _SIGHTINGS.pop(key, False):
+        _SIGHTINGS[key] = True
+        return True
+    if len(_SIGHTINGS) >= SIGHTINGS_SIZE:
+        del _SIGHTINGS[next(iter(_SIGHTINGS))]
+    _SIGHTINGS[key] = True
+    return False
+
+
+#: Compiled plans and seen focal lists, least recently used first (dicts keep insertion order).
+_PLANS: dict[tuple, TuplePlan] = {}
+_SIGHTINGS: dict[tuple, bool] = {}
+
+
+# -- integer codes of focal elements -------------------------------------------------------------------
+class Encoding(NamedTuple):
+    """Integer codes of the focal elements of s sources under a fusion model.
+
+    For any elements X and Y of the sources, X ∩ Y under the model has the code
+    ``c(X) & c(Y)``, X ∪ Y has ``c(X) | c(Y)``, ∅ has 0, and two elements have equal codes
+    exactly when they are equal under the model.
+
+    Attributes
+    ----------
+    kind : {"exclusive", "regions"}
+        ``exclusive``: every focal element is a union of hypotheses that exclude one
+        another under the model (Shafer's model, say), and its code is the bit mask of
+        those hypotheses.  ``regions``: the code has one bit per Venn region that the model
+        allows, set for the regions inside the element.
+    codes : tuple of tuple of int
+        The code of every focal element, source by source.
+    width : int
+        The number of bits a code may use (hypotheses, or allowed regions).
+    """
+
+    kind: str
+    codes: tuple[tuple[int, ...], ...]
+    width: int
+
+
+def encode(model: Model, projected: Sequence[Sequence[Element]]) -> Encoding | None:
+    """The codes of focal elements already reduced under ``model``, or None if the model has too many regions.
+
+    Parameters
+    ----------
+    model : Model
+        The fusion model.
+    projected : sequence of sequence of Element
+        Each source's focal elements in their form under ``model``.
+
+    Examples
+    --------
+    >>> from belief import Frame
+    >>> f = Frame(["a", "b", "c"])
+    >>> encode(Model.shafer(f), [[f["a"], f.element("a|c")], [f["c"]]])
+    Encoding(kind='exclusive', codes=((1, 5), (4,)), width=3)
+    >>> encode(Model.free(f), [[f["a"]], [f["b"]]]).kind
+    'regions'
+    """
+    if model.kind == "shafer":
+        # Under Shafer's model a reduced element has single-hypothesis conjunctions only.
+        return Encoding("exclusive", tuple(tuple([sum(x.terms) for x in elements]) for elements in projected),
+                        len(model.frame))
+    used = 0
+    single = True
+    for elements in projected:
+        for x in elements:
+            for t in x.terms:
+                used |= t
+                if single and t & (t - 1):
+                    single = False
+    if single and _exclusive(model, used):
+        return Encoding("exclusive", tuple(tuple([sum(x.terms) for x in elements]) for elements in projected),
+                        len(model.frame))
+    table = _region_table(model)
+    if table is None:
+        return None
+    hypotheses, width = table
+    memo: dict[int, int] = {}
+    codes = []
+    for elements in projected:
+        row = []
+        for x in elements:
+            code = 0
+            for t in x.terms:
+                region = memo.get(t)
+                if region is None:
+                    region = -1
+                    m = t
+                    while m:
+                        low = m & -m
+                        region &= hypotheses[low.bit_length() - 1]
+                        m ^= low
+                    memo[t] = region
+                code |= region
+            row.append(code)
+        codes.append(tuple(row))
+    return Encoding("regions", tuple(codes), width)
+
+
+@lru_cache(maxsize=1024)
+def _exclusive(model: Model, used: int) -> bool:
+    """Whether the model forbids every pair of the hypotheses in ``used``."""
+    bits = mask_terms(used)
+    return all(model.is_forbidden(a | b) for k, a in enumerate(bits) for b in bits[k + 1:])
+
+
+@lru_cache(maxsize=64)
+def _region_table(model: Model) -> tuple[tuple[int, ...], int] | None:
+    """For each hypothesis, the set of allowed regions that contain it (a bit per region), and their number.
+
+    None when the model allows more than :data:`REGION_LIMIT` regions (or the frame is too
+    large to list its regions).
+    """
+    n = len(model.frame)
+    if n > 12 or model.cardinality(model.total) > REGION_LIMIT:
+        return None
+    hypotheses = [0] * n
+    count = 0
+    for region in range(1, 1 << n):
+        if model.is_forbidden(region):
+            continue
+        bit = 1 << count
+        count += 1
+        m = region
+        while m:
+            low = m & -m
+            hypotheses[low.bit_length() - 1] |= bit
+            m ^= low
+    return tuple(hypotheses), count
+
+
+def mask_terms(mask: int) -> tuple[int, ...]:
+    """The single-hypothesis conjunctions of a hypothesis mask, in frame order.
+
+    >>> mask_terms(0b1011)
+    (1, 2, 8)
+    """
+    terms = []
+    while mask:
+        low = mask & -mask
+        terms.append(low)
+        mask ^= low
+    return tuple(terms)
+
+
+@lru_cache(maxsize=None)
+def union_ranks(n: int) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    """The canonical order of the 2^n unions of hypotheses of an n-hypothesis frame (∅ first).
+
+    Returns ``rank`` (the position of every mask), ``unrank`` (the mask at every position)
+    and ``rank`` as a list.  Fewer hypotheses come first; among as many, the set whose
+    smallest differing position is its own, i.e. the larger bit-reversed mask (the order of
+    :attr:`Element.sort_key`).  The table depends on n only; n is at most
+    :data:`RANK_TABLE_WIDTH`.
+
+    >>> rank, unrank, _ = union_ranks(3)
+    >>> unrank.tolist()      # ∅, a, b, c, a|b, a|c, b|c, a|b|c
+    [0, 1, 2, 4, 3, 5, 6, 7]
+    """
+    if not 0 <= n <= RANK_TABLE_WIDTH:
+        raise ValueError(f"rank tables go up to {RANK_TABLE_WIDTH} hypotheses, not {n}")
+    masks = np.arange(1 << n, dtype=np.uint64)
+    unrank = np.lexsort((~_reversed_bits(masks, n), np.bitwise_count(masks))).astype(np.int64)
+    rank = np.empty(1 << n, dtype=np.int64)
+    rank[unrank] = np.arange(1 << n)
+    rank.flags.writeable = False
+    unrank.flags.writeable = False
+    return rank, unrank, rank.tolist()
+
+
+def _reversed_bits(masks: np.ndarray, width: int) -> np.ndarray:
+    """Each uint64 mask with its lowest ``width`` bits in reverse order."""
+    reverse = np.zeros(len(masks), dtype=np.uint64)
+    for i in range(width):
+        reverse |= ((masks >> np.uint64(i)) & np.uint64(1)) << np.uint64(width - 1 - i)
+    return reverse
+
+
+def union_elements(frame: Frame, masks: Sequence[int]) -> list[Element]:
+    """The unions of hypotheses given by bit masks (0 gives ∅)."""
+    return make_elements(frame, [mask_terms(m) for m in masks])
+
+
+def tuple_codes(arrays: Sequence[np.ndarray], ufunc) -> np.ndarray:
+    """``ufunc`` folded over one code per source for every tuple, in row-major tuple order, shape (T,)."""
+    s = len(arrays)
+    out = arrays[0].reshape((-1,) + (1,) * (s - 1))
+    for i, a in enumerate(arrays[1:], start=1):
+        out = ufunc(out, a.reshape((1,) * i + (-1,) + (1,) * (s - 1 - i)))
+    return out.reshape(-1)
+
+
+def decode(model: Model, encoding: Encoding, projected: Sequence[Sequence[Element]], codes: Sequence[int],
+           tuples: Sequence[Sequence[int]], ops: Sequence[str]) -> list[Element]:
+    """The elements of some tuple codes.
+
+    ``tuples[k]`` is a tuple (one column per source) whose ∩ (``ops[k] == "meet"``) or ∪
+    (``"join"``) has the code ``codes[k]``; region codes are turned into elements through it.
+    """
+    if encoding.kind == "exclusive":
+        return union_elements(model.frame, codes)
+    out = []
+    for columns, op in zip(tuples, ops):
+        value = projected[0][columns[0]]
+        for source in range(1, len(projected)):
+            x = projected[source][columns[source]]
+            value = model.reduce(value & x if op == "meet" else value | x)
+        out.append(value)
+    return out
+
+
+def canonical_codes(model: Model, encoding: Encoding, projected: Sequence[Sequence[Element]], codes: np.ndarray,
+                    ops: np.ndarray | str) -> tuple[list[Element], np.ndarray]:
+    """The distinct elements of some tuple codes in canonical order, and each code's position among them.
+
+    ``codes`` (uint64, one per tuple in row-major order) are ∩ or ∪ of the tuples' focal
+    elements, as ``ops`` says: "meet", "join", or per tuple True for ∩ (region codes are
+    turned into elements through a tuple that has them).
+    """
+    if encoding.kind == "exclusive":
+        n = len(model.frame)
+        if n <= RANK_TABLE_WIDTH:
+            # The canonical positions of all 2^n unions: a look-up and no sort of elements.
+            rank, unrank, _ = union_ranks(n)
+            ranked = rank[codes.astype(np.intp)]
+            present = np.flatnonzero(np.bincount(ranked, minlength=1 << n))
+            compact = np.zeros(1 << n, dtype=np.int64)
+            compact[present] = np.arange(len(present))
+            return union_elements(model.frame, unrank[present].tolist()), compact[ranked]
+        present, inverse = np.unique(codes, return_inverse=True)
+        order = np.lexsort((~_reversed_bits(present, n), np.bitwise_count(present)))
+        rank = np.empty(len(present), dtype=np.int64)
+        rank[order] = np.arange(len(present))
+        return union_elements(model.frame, present[order].tolist()), rank[inverse.reshape(-1)]
+    unique, first, inverse = np.unique(codes, return_index=True, return_inverse=True)
+    sizes = tuple(len(c) for c in encoding.codes)
+    tuples = list(zip(*(c.tolist() for c in np.unravel_index(first, sizes))))
+    if isinstance(ops, str):
+        kinds = [ops] * len(tuples)
+    else:
+        kinds = ["meet" if m else "join" for m in ops[first].tolist()]
+    elements = decode(model, encoding, projected, unique.tolist(), tuples, kinds)
+    keys = [e.sort_key for e in elements]
+    order = sorted(range(len(elements)), key=keys.__getitem__)
+    rank = np.empty(len(elements), dtype=np.int64)
+    rank[order] = np.arange(len(elements))
+    return [elements[k] for k in order], rank[inverse.reshape(-1)]
+
+
+def coded_table(model: Model, projected: Sequence[Sequence[Element]], ufunc,
+                encoding: Encoding | None = None) -> tuple[list[Element], np.ndarray] | None:
+    """The ∩ (``np.bitwise_and``) or ∪ (``np.bitwise_or``) of every tuple from integer codes.
+
+    Returns the distinct results and, per tuple in row-major order, an index into them
+    (as :attr:`TuplePlan.meet_table`), or None where the codes do not fit 64 bits.
+    """
+    if encoding is None:
+        encoding = encode(model, projected)
+    if encoding is None or encoding.width > 64:
+        return None
+    combined = tuple_codes([np.array(c, dtype=np.uint64) for c in encoding.codes], ufunc)
+    return canonical_codes(model, encoding, projected, combined, "meet" if ufunc is np.bitwise_and else "join")
 
 
 def row_chunks(n_rows: int, width: int):

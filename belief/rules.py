@@ -19,9 +19,11 @@ stricter model for the fusion (see :meth:`belief.model.Model.is_refined_by`).
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import lru_cache, reduce
+from operator import add
 from typing import Any, Union
 
 import numpy as np
@@ -33,7 +35,9 @@ from belief.errors import BeliefError, FrameError, InvalidMassError, ModelError,
 from belief.frame import Element
 from belief.mass import MassFunction
 from belief.model import Model
-from belief.plan import MAX_TUPLES, Scatter, TuplePlan, gather_product, row_chunks, tuple_plan
+from belief.plan import (MAX_TUPLES, RANK_TABLE_WIDTH, Encoding, Scatter, TuplePlan, _exclusive, canonical_codes,
+                         decode, encode, gather_product, plan_lookup, row_chunks, sighted, tuple_codes, tuple_plan,
+                         union_ranks)
 
 __all__ = ["combine", "sequential", "inconsistency", "RULES", "RuleInfo", "get_rule", "register_rule",
            "rule_names", "UnknownRuleError", "ENGINES", "R_MODES", "EMPTY_MODES"]
@@ -208,6 +212,10 @@ def combine(*sources: Source, rule: Union[str, RuleInfo] = "dempster", model: Mo
     """
     info = get_rule(rule)
     bayesian.check_engine(engine)
+    if not options and engine != "bayesian":
+        fused = _single(info, sources, model)
+        if fused is not None:
+            return fused
     unknown = set(options) - set(info.options)
     if unknown:
         accepted = ", ".join(info.options) if info.options else "none"
@@ -270,6 +278,204 @@ def _plan(batches: Sequence[MassBatch], model: Model) -> TuplePlan:
     return plan
 
 
+# -- the direct path: focal elements seen for the first time -------------------------------------------
+#: A single row with at most this many tuples is combined by a Python loop over the tuples.
+LOOP_TUPLES = 256
+#: A single row whose codes do not fit 64 bits is looped over up to this many tuples.
+WIDE_LOOP_TUPLES = 4096
+
+
+@dataclass(frozen=True, eq=False)
+class _Direct:
+    """What the direct path needs of one combination: the focal elements under the fusion model and their codes."""
+
+    projected: tuple[tuple[Element, ...], ...]
+    encoding: Encoding
+    loop: bool                          # a Python loop over the tuples of one row, else numpy over all tuples
+
+    @property
+    def sizes(self) -> tuple[int, ...]:
+        return tuple(len(c) for c in self.encoding.codes)
+
+
+def _direct(batches: Sequence[MassBatch], model: Model, purpose: str) -> _Direct | None:
+    """How to combine these sources without a plan, or None where the plan serves the call.
+
+    A compiled plan costs more than one direct evaluation and pays only when its focal
+    elements come back, so the plan serves a call when it is cached already or when these
+    focal lists were met before (it is compiled then); so does a combination whose codes
+    are too wide for numpy and too many to loop over.  The choice never changes a result:
+    the direct path adds the same products in the same order.
+    """
+    count = 1
+    for b in batches:
+        count *= len(b.focal)
+    if count > MAX_TUPLES:
+        return None                     # the plan path refuses it, with its message
+    source_model = batches[0].model
+    keys = tuple(b.focal_key for b in batches)
+    if plan_lookup(source_model, model, keys) is not None or sighted(source_model, model, keys, purpose):
+        return None
+    if source_model == model:
+        projected = tuple(b.focal for b in batches)      # already in their form under the model
+    else:
+        projected = tuple(tuple(model.reduce(x) for x in b.focal) for b in batches)
+    encoding = encode(model, projected)
+    if encoding is None:
+        return None
+    single = all(len(b) == 1 for b in batches)
+    if single and count <= LOOP_TUPLES:
+        return _Direct(projected, encoding, True)
+    if encoding.width <= 64:
+        return _Direct(projected, encoding, False)
+    if single and count <= WIDE_LOOP_TUPLES:
+        return _Direct(projected, encoding, True)
+    return None
+
+
+def _segment_sum(values: list[float]) -> float:
+    """The sum ``np.add.reduceat`` gives for one segment: the first value plus numpy's pairwise sum of the rest.
+
+    The loops of the direct path add with it, so that their results equal the plan's to the last bit.
+    """
+    n = len(values)
+    if n == 1:
+        return values[0]
+    if n <= 8:
+        # Fewer than eight after the first: numpy adds them one by one (``sum`` may compensate).
+        return values[0] + reduce(add, values[1:])
+    return values[0] + _pairwise(values, 1, n - 1)
+
+
+def _pairwise(values: list[float], start: int, n: int) -> float:
+    """numpy's pairwise summation of ``values[start:start + n]`` (eight partial sums, blocks of 128)."""
+    if n < 8:
+        total = 0.0
+        for i in range(start, start + n):
+            total += values[i]
+        return total
+    if n <= 128:
+        r0, r1, r2, r3, r4, r5, r6, r7 = values[start:start + 8]
+        i = start + 8
+        stop = start + n - n % 8
+        while i < stop:
+            r0 += values[i]
+            r1 += values[i + 1]
+            r2 += values[i + 2]
+            r3 += values[i + 3]
+            r4 += values[i + 4]
+            r5 += values[i + 5]
+            r6 += values[i + 6]
+            r7 += values[i + 7]
+            i += 8
+        total = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+        for k in range(i, start + n):
+            total += values[k]
+        return total
+    half = n // 2
+    half -= half % 8
+    return _pairwise(values, start, half) + _pairwise(values, start + half, n - half)
+
+
+def _tuples(sizes: Sequence[int]):
+    """Every tuple of columns, in row-major order (the order of :attr:`TuplePlan.columns`)."""
+    return itertools.product(*(range(k) for k in sizes))
+
+
+def _canonical(direct: _Direct, elements: list[Element]) -> list[int]:
+    """The positions of ``elements`` in canonical order."""
+    if direct.encoding.kind == "exclusive":
+        # Unions of hypotheses: fewer hypotheses first, then by their positions (Element.sort_key).
+        keys = [(len(e.terms), e.terms) for e in elements]
+    else:
+        keys = [e.sort_key for e in elements]
+    return sorted(range(len(elements)), key=keys.__getitem__)
+
+
+def _loop_targets(batches: Sequence[MassBatch], model: Model, key: str, direct: _Direct) -> MassBatch | None:
+    """One row, a few tuples: each tuple's product goes to one element, summed per element in plain Python."""
+    codes = direct.encoding.codes
+    rows = [b.values[0].tolist() for b in batches]
+    groups: dict[int, list[float]] = {}
+    first: dict[int, tuple[tuple[int, ...], str]] = {}
+    if len(batches) == 2 and key in ("meet", "join"):
+        c1, c2 = codes
+        v1, v2 = rows
+        meet = key == "meet"
+        for i, a in enumerate(c1):
+            p = v1[i]
+            for j, b in enumerate(c2):
+                c = a & b if meet else a | b
+                group = groups.get(c)
+                if group is None:
+                    groups[c] = [p * v2[j]]
+                    first[c] = ((i, j), key)
+                else:
+                    group.append(p * v2[j])
+    else:
+        for columns in _tuples(direct.sizes):
+            meet = join = None
+            if key != "join":
+                meet = -1
+                for c, k in zip(codes, columns):
+                    meet &= c[k]
+            if key != "meet":
+                join = 0
+                for c, k in zip(codes, columns):
+                    join |= c[k]
+            if key == "meet" or (key != "join" and meet):
+                code, op = meet, "meet"
+            elif key == "join" or join or key == "dubois_prade":
+                code, op = join, "join"
+            else:
+                return None                 # DSmH's S2: every element vanished (the plan path places it)
+            p = rows[0][columns[0]]
+            for row, k in zip(rows[1:], columns[1:]):
+                p *= row[k]
+            group = groups.get(code)
+            if group is None:
+                groups[code] = [p]
+                first[code] = (columns, op)
+            else:
+                group.append(p)
+    unique = list(groups)
+    elements = decode(model, direct.encoding, direct.projected, unique,
+                      [first[c][0] for c in unique], [first[c][1] for c in unique])
+    order = _canonical(direct, elements)
+    values = np.array([[_segment_sum(groups[unique[k]]) for k in order]])
+    return MassBatch._trusted(model, tuple(elements[k] for k in order), values, canonical=True)
+
+
+def _array_targets(batches: Sequence[MassBatch], model: Model, key: str, direct: _Direct) -> MassBatch | None:
+    """Each tuple's product to one element, on all tuples at once; the arithmetic of the plan path."""
+    arrays = [np.array(c, dtype=np.uint64) for c in direct.encoding.codes]
+    meet = tuple_codes(arrays, np.bitwise_and) if key != "join" else None
+    join = tuple_codes(arrays, np.bitwise_or) if key != "meet" else None
+    if key == "meet":
+        targets, use_meet = meet, None
+    elif key == "join":
+        targets, use_meet = join, None
+    else:
+        use_meet = meet != 0
+        if key == "dsmh" and not (use_meet | (join != 0)).all():
+            return None                     # DSmH's S2: every element vanished (the plan path places it)
+        targets = np.where(use_meet, meet, join)
+    elements, ranks = canonical_codes(model, direct.encoding, direct.projected, targets,
+                                      key if use_meet is None else use_meet)
+    scatter = Scatter.from_ranks(elements, ranks)
+    columns = tuple(c.astype(np.int64, copy=False) for c in np.unravel_index(scatter.order, direct.sizes))
+    return _scatter_products(batches, model, scatter, columns, len(targets))
+
+
+def _scatter_products(batches: Sequence[MassBatch], model: Model, scatter: Scatter,
+                      columns: tuple[np.ndarray, ...], count: int) -> MassBatch:
+    n, values = _values(batches)
+    out = np.empty((n, len(scatter.elements)))
+    for rows in row_chunks(n, count):
+        out[rows] = scatter.apply(gather_product([v[rows] for v in values], columns))
+    return MassBatch._trusted(model, scatter.elements, out, canonical=True)
+
+
 def _require_normal(batches: Sequence[MassBatch], rule: str) -> None:
     for k, b in enumerate(batches, start=1):
         if b.empty_mass.any():
@@ -286,12 +492,12 @@ def _require_kept(batch: MassBatch, model: Model, rule: str, number: int) -> Non
             )
 
 
-def _require_nonempty(plan: TuplePlan, rule: str) -> None:
-    for k, (orig, proj) in enumerate(zip(plan.focal, plan.projected), start=1):
+def _require_nonempty(focal, projected, model: Model, rule: str) -> None:
+    for k, (orig, proj) in enumerate(zip(focal, projected), start=1):
         for x, y in zip(orig, proj):
             if x.terms and not y.terms:
                 raise ModelError(
-                    f"{rule} cannot give mass to {x} of source {k}, which is empty under the {plan.model.kind} "
+                    f"{rule} cannot give mass to {x} of source {k}, which is empty under the {model.kind} "
                     "fusion model; use dsmh for such dynamic fusion"
                 )
 
@@ -310,13 +516,14 @@ def _kernel(plan: TuplePlan, key: str) -> tuple[Scatter, tuple[np.ndarray, ...]]
 
 def _tuple_targets_rule(batches: Sequence[MassBatch], model: Model, key: str) -> MassBatch:
     """Rules that send each tuple's whole product to one element."""
+    direct = _direct(batches, model, "targets")
+    if direct is not None:
+        result = (_loop_targets if direct.loop else _array_targets)(batches, model, key, direct)
+        if result is not None:
+            return result
     plan = _plan(batches, model)
     scatter, columns = _kernel(plan, key)
-    n, values = _values(batches)
-    out = np.empty((n, len(scatter.elements)))
-    for rows in row_chunks(n, plan.count):
-        out[rows] = scatter.apply(gather_product([v[rows] for v in values], columns))
-    return MassBatch._trusted(model, scatter.elements, out, canonical=True)
+    return _scatter_products(batches, model, scatter, columns, plan.count)
 
 
 def _prune(batch: MassBatch) -> MassBatch:
@@ -405,6 +612,323 @@ def _move_empty(result: MassBatch, to: Element | None, model: Model, rule: str) 
     return MassBatch._trusted(model, tuple(new_focal[i] for i in order), new_values[:, order], canonical=True)
 
 
+# -- single mass functions of unions of hypotheses -------------------------------------------------------
+#: A single combination of at most this many tuples is summed by a Python loop (numpy's calls cost more).
+SINGLE_LOOP_TUPLES = 16
+#: The same for the conflicting tuples of PCR5 and PCR6.
+PCR_LOOP_TUPLES = 512
+#: How many single-row tables (:func:`_single_table`) are kept for focal elements that come back.
+SINGLE_CACHE_SIZE = 1024
+
+_SINGLE_TABLES: dict[tuple, tuple] = {}
+_SINGLE_SIGHTINGS: dict[tuple, bool] = {}
+_EMPTY_MESSAGE = ("dempster: total conflict between the sources, m(∅) = 1; "
+                  "Dempster's rule is undefined (try yager, dubois_prade, dsmh or pcr6)")
+
+
+def _single(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> MassFunction | None:
+    """Combine mass functions whose focal elements are unions of exclusive hypotheses, or None.
+
+    This is the direct path at its leanest: the focal elements are hypothesis bit masks
+    (:meth:`MassFunction._union_masks`), their intersections and unions ``&`` and ``|``, the
+    canonical order a look-up in :func:`~belief.plan.union_ranks`, and no element is made
+    (the result's are made when it is read).  It takes Shafer's model, or any model that
+    forbids every pair of the hypotheses in use, frames of up to
+    :data:`~belief.plan.RANK_TABLE_WIDTH` hypotheses, the sources' own model for the fusion,
+    and the built-in rules of :data:`_SINGLE_RULES`; anything else, and every error but
+    Dempster's total conflict, goes the general way (None).  Each step adds the same
+    products in the same order as the plan of :mod:`belief.plan`, so the results are the
+    same to the last bit.
+    """
+    kind = _SINGLE_RULES.get(info.function)
+    if kind is None:
+        return None
+    if len(sources) == 1 and isinstance(sources[0], (list, tuple)):
+        sources = sources[0]
+    if len(sources) < 2 or type(sources[0]) is not MassFunction:
+        return None
+    source_model = sources[0].model
+    for m in sources:
+        if type(m) is not MassFunction or (m.model is not source_model and m.model != source_model):
+            return None
+    if model is not None and model is not source_model and model != source_model:
+        return None
+    n = len(source_model.frame)
+    if n > RANK_TABLE_WIDTH:
+        return None
+    masks = []
+    count = 1
+    for m in sources:
+        mk = m._union_masks()
+        if mk is None:
+            return None
+        masks.append(mk)
+        count *= len(mk)
+    if count > MAX_TUPLES:
+        return None
+    if source_model.kind != "shafer":
+        used = 0
+        for mk in masks:
+            for x in mk:
+                used |= x
+        if not _exclusive(source_model, used):
+            return None
+    # Few tuples go through a Python loop on the floats, more through numpy on the arrays.
+    if kind in ("pcr5", "pcr6"):
+        loop = count <= PCR_LOOP_TUPLES
+    elif kind in ("dubois_prade", "dsmh"):
+        loop = count <= SINGLE_LOOP_TUPLES
+    else:
+        loop = len(masks[0]) * len(masks[1]) <= SINGLE_LOOP_TUPLES     # the first step of the fold
+    if loop:
+        values = [m._union_floats() for m in sources]
+    else:
+        values = [m.values for m in sources]
+    if kind in ("pcr5", "pcr6", "yager", "dubois_prade", "dsmh"):
+        for mk in masks:
+            if mk[0] == 0:                      # mass on ∅ (it sorts first): the general path refuses it
+                return None
+        if kind in ("pcr5", "pcr6"):
+            return _single_pcr(source_model, n, masks, values, kind)
+    if kind in ("dubois_prade", "dsmh"):
+        out = _single_targets(n, masks, values, kind)
+    else:
+        out = _single_fold(n, masks, values, "join" if kind == "join" else "meet")
+    if out is None:
+        return None
+    focal, row = out
+    if focal[0] == 0:
+        if kind == "dempster":
+            # _move_empty: the rest rescaled by its sum (numpy's pairwise sum, also in the loop's lists).
+            if type(row) is list:
+                kept = row[1:]
+                scale = _pairwise(kept, 0, len(kept))
+                if not scale > 0:
+                    raise TotalConflictError(_EMPTY_MESSAGE)
+                focal, row = focal[1:], [x / scale for x in kept]
+            else:
+                kept = row[1:]
+                scale = kept.sum()
+                if not scale > 0:
+                    raise TotalConflictError(_EMPTY_MESSAGE)
+                focal, row = focal[1:], kept / scale
+        elif kind == "yager":
+            focal, row = _single_to_total(source_model, n, focal, np.asarray(row))
+    return _single_result(source_model, focal, row)
+
+
+def _single_result(model: Model, focal: list[int], row: list | np.ndarray) -> MassFunction:
+    """The mass function of a result row, without its zero masses (as ``MassBatch.__getitem__``)."""
+    if type(row) is list:
+        if all(x > 0 for x in row):
+            return MassFunction._from_masks(model, tuple(focal), tuple(row))
+        pairs = [(f, x) for f, x in zip(focal, row) if x > 0]
+        return MassFunction._from_masks(model, tuple([f for f, _ in pairs]), tuple([x for _, x in pairs]))
+    if row.min() > 0:
+        return MassFunction._from_masks(model, tuple(focal), row if row.base is None else row.copy())
+    kept = np.flatnonzero(row > 0)
+    return MassFunction._from_masks(model, tuple([focal[i] for i in kept.tolist()]), row[kept])
+
+
+def _single_to_total(model: Model, n: int, focal: list[int], row: np.ndarray) -> tuple[list[int], np.ndarray]:
+    """Yager: the ∅ mass (first) added to total ignorance, as :func:`_move_empty` does."""
+    total = sum(model.total.terms)
+    new_focal = focal[1:]
+    new_values = row[1:].copy()
+    if total in new_focal:
+        new_values[new_focal.index(total)] += row[0]
+        return new_focal, new_values
+    rank = union_ranks(n)[2]
+    new_focal.append(total)
+    new_values = np.append(new_values, row[0])
+    order = sorted(range(len(new_focal)), key=lambda i: rank[new_focal[i]])
+    return [new_focal[i] for i in order], new_values[order]
+
+
+def _single_fold(n: int, masks: list, values: list, key: str) -> tuple[list[int], list | np.ndarray] | None:
+    """:func:`_fold` on masks: pairwise, the zero masses of each partial result dropped."""
+    out = _single_targets(n, masks[:2], values[:2], key)
+    for mk, v in zip(masks[2:], values[2:]):
+        focal, row = _single_prune(*out)
+        out = _single_targets(n, [tuple(focal), mk], [row, v], key)
+    return _single_prune(*out) if len(masks) > 2 else out
+
+
+def _single_prune(focal: list[int], row: list | np.ndarray) -> tuple[list[int], list | np.ndarray]:
+    """:func:`_prune` of one row."""
+    if type(row) is not np.ndarray:
+        if all(x != 0 for x in row):
+            return focal, row
+        pairs = [(f, x) for f, x in zip(focal, row) if x != 0]
+        return [f for f, _ in pairs], [x for _, x in pairs]
+    live = np.flatnonzero(row)
+    if live.size == len(focal):
+        return focal, row
+    return [focal[i] for i in live.tolist()], row[live]
+
+
+def _single_seen(key: tuple, table) -> None:
+    """Keep ``table`` if ``key`` was met before (its focal elements came back); else remember ``key``."""
+    if _SINGLE_SIGHTINGS.pop(key, False):
+        if len(_SINGLE_TABLES) >= SINGLE_CACHE_SIZE:
+            del _SINGLE_TABLES[next(iter(_SINGLE_TABLES))]
+        _SINGLE_TABLES[key] = table
+        return
+    if len(_SINGLE_SIGHTINGS) >= SINGLE_CACHE_SIZE:
+        del _SINGLE_SIGHTINGS[next(iter(_SINGLE_SIGHTINGS))]
+    _SINGLE_SIGHTINGS[key] = True
+
+
+def _outer(values: Sequence[np.ndarray]) -> np.ndarray:
+    """Π_i values[i][X_i] for every tuple, row-major, multiplied left to right as :func:`gather_product`."""
+    if len(values) == 2:
+        return np.multiply.outer(values[0], values[1]).ravel()
+    s = len(values)
+    out = values[0].reshape((-1,) + (1,) * (s - 1))
+    for i, v in enumerate(values[1:], start=1):
+        out = out * v.reshape((1,) * i + (-1,) + (1,) * (s - 1 - i))
+    return out.ravel()
+
+
+def _single_targets(n: int, masks: list, values: list, key: str) -> tuple[list[int], list | np.ndarray] | None:
+    """Each tuple's product to one union of hypotheses: the targets in canonical order and their sums."""
+    count = 1
+    for mk in masks:
+        count *= len(mk)
+    if count <= SINGLE_LOOP_TUPLES:
+        return _single_loop(n, masks, values, key)
+    memo = (n, key, tuple(masks))
+    table = _SINGLE_TABLES.get(memo)
+    if table is None:
+        table = _single_table(n, masks, key)
+        if table is None:
+            return None
+        _single_seen(memo, table)
+    order, starts, focal = table
+    values = [v if type(v) is np.ndarray else np.array(v) for v in values]
+    return focal, np.add.reduceat(_outer(values)[order], starts)
+
+
+def _single_table(n: int, masks: list, key: str) -> tuple[np.ndarray, np.ndarray, list[int]] | None:
+    """The order that sorts the tuples by target (stable), where each target's run starts, and the targets."""
+    if len(masks) == 2 and key in ("meet", "join"):
+        ufunc = np.bitwise_and if key == "meet" else np.bitwise_or
+        codes = ufunc.outer(np.array(masks[0]), np.array(masks[1]))
+    else:
+        arrays = [np.array(mk, dtype=np.int64) for mk in masks]
+        if key == "meet":
+            codes = tuple_codes(arrays, np.bitwise_and)
+        elif key == "join":
+            codes = tuple_codes(arrays, np.bitwise_or)
+        else:
+            meet = tuple_codes(arrays, np.bitwise_and)
+            join = tuple_codes(arrays, np.bitwise_or)
+            if key == "dsmh" and not ((meet != 0) | (join != 0)).all():
+                return None
+            codes = np.where(meet != 0, meet, join)
+    ranked = _narrow_ranks(n)[codes].ravel()
+    order = ranked.argsort(kind="stable")
+    sorted_ranks = ranked[order]
+    step = np.empty(len(sorted_ranks), dtype=bool)
+    step[0] = True
+    np.not_equal(sorted_ranks[1:], sorted_ranks[:-1], out=step[1:])
+    starts = step.nonzero()[0]
+    return order, starts, union_ranks(n)[1][sorted_ranks[starts]].tolist()
+
+
+@lru_cache(maxsize=None)
+def _narrow_ranks(n: int) -> np.ndarray:
+    """:func:`~belief.plan.union_ranks` in the narrowest unsigned type (small keys sort by radix)."""
+    return union_ranks(n)[0].astype(np.uint8 if n <= 8 else np.uint16)
+
+
+def _single_loop(n: int, masks: list, values: list, key: str) -> tuple[list[int], list[float]] | None:
+    """:func:`_single_targets` for a few tuples, in Python, with numpy's order of additions (sums as a list)."""
+    rows = [v if type(v) is not np.ndarray else v.tolist() for v in values]
+    groups: dict[int, list[float]] = {}
+    get = groups.get
+    if len(masks) == 2 and key in ("meet", "join"):
+        c1, c2 = masks
+        v1, v2 = rows
+        meet = key == "meet"
+        for a, p in zip(c1, v1):
+            for b, q in zip(c2, v2):
+                c = a & b if meet else a | b
+                group = get(c)
+                if group is None:
+                    groups[c] = [p * q]
+                else:
+                    group.append(p * q)
+    else:
+        for columns in _tuples([len(mk) for mk in masks]):
+            meet = -1
+            join = 0
+            for mk, k in zip(masks, columns):
+                meet &= mk[k]
+                join |= mk[k]
+            if key == "meet":
+                c = meet
+            elif key == "join":
+                c = join
+            else:
+                c = meet or join
+                if key == "dsmh" and not c:
+                    return None
+            p = rows[0][columns[0]]
+            for row, k in zip(rows[1:], columns[1:]):
+                p *= row[k]
+            group = get(c)
+            if group is None:
+                groups[c] = [p]
+            else:
+                group.append(p)
+    focal = sorted(groups, key=union_ranks(n)[2].__getitem__)
+    sums = []
+    for c in focal:
+        group = groups[c]
+        sums.append(group[0] if len(group) == 1 else _segment_sum(group))
+    return focal, sums
+
+
+def _single_pcr(model: Model, n: int, masks: list, values: list, rule: str) -> MassFunction:
+    """PCR5 / PCR6 of mass functions of unions of hypotheses: :func:`_pcr` on masks."""
+    focal, consensus = _single_fold(n, masks, values, "meet")
+    rank = union_ranks(n)[2]
+    count = 1
+    for mk in masks:
+        count *= len(mk)
+    memo = (n, rule, tuple(masks))
+    tables = _SINGLE_TABLES.get(memo)
+    if tables is None and count <= PCR_LOOP_TUPLES:
+        targets, shares = _pcr_loop(masks, [v if type(v) is not np.ndarray else v.tolist() for v in values], rule,
+                                    rank.__getitem__)
+    else:
+        if tables is None:
+            tables = _single_pcr_tables(n, masks, rule)
+            _single_seen(memo, tables)
+        targets, shares = _pcr_share_values(1, [np.asarray(v).reshape(1, -1) for v in values], tables)
+    # _add: the consensus without ∅, plus the shares.
+    keep = [i for i, x in enumerate(focal) if x]
+    union = sorted({focal[i] for i in keep} | set(targets), key=rank.__getitem__)
+    index = {x: k for k, x in enumerate(union)}
+    out = np.zeros((1, len(union)))
+    out[:, [index[focal[i]] for i in keep]] += np.asarray(consensus)[keep]
+    out[:, [index[x] for x in targets]] += shares
+    return _single_result(model, union, out[0])
+
+
+def _single_pcr_tables(n: int, masks: list, rule: str):
+    """:func:`_pcr_tables` of mass functions of unions of hypotheses."""
+    arrays = [np.array(mk, dtype=np.int64) for mk in masks]
+    conflict = np.flatnonzero(tuple_codes(arrays, np.bitwise_and) == 0)
+    columns = tuple(c.astype(np.int64, copy=False) for c in np.unravel_index(conflict, [len(mk) for mk in masks]))
+    rank = union_ranks(n)[2]
+    unique = sorted({x for mk in masks for x in mk}, key=rank.__getitem__)
+    index = {x: k for k, x in enumerate(unique)}
+    per_source = [np.array([index[x] for x in mk], dtype=np.int64) for mk in masks]
+    return _pcr_tables(columns, unique, per_source, rule, ranked=True)
+
+
 # -- the rules ----------------------------------------------------------------------------------------
 @register_rule("conjunctive", summary="unnormalised conjunctive rule (Smets' TBM); conflict stays on ∅",
                associative=True, keeps_conflict=True, aliases=("smets", "tbm", "unnormalized"))
@@ -481,12 +1005,32 @@ def dsmh(sources: Sequence[MassBatch], model: Model) -> MassBatch:
 def _pcr(sources: Sequence[MassBatch], model: Model, rule: str) -> MassBatch:
     """Consensus (the conjunctive rule without ∅) plus the redistribution of every conflicting tuple."""
     _require_normal(sources, rule)
+    direct = _direct(sources, model, "pcr")
+    if direct is not None:
+        _require_nonempty([b.focal for b in sources], direct.projected, model, rule)
+        consensus = _fold(sources, model, "meet")
+        if direct.loop:
+            elements, shares = _loop_pcr(sources, direct, rule)
+        else:
+            elements, shares = _pcr_shares(sources, _array_pcr_tables(direct, rule))
+        return _add(model, consensus, elements, shares)
     plan = _plan(sources, model)
-    _require_nonempty(plan, rule)
+    _require_nonempty(plan.focal, plan.projected, model, rule)
     consensus = _fold(sources, model, "meet")
-    scatter, columns, positions, representative = _pcr_kernel(plan, rule)
+    elements, shares = _pcr_shares(sources, _pcr_kernel(plan, rule))
+    return _add(model, consensus, elements, shares)
+
+
+def _pcr_shares(sources: Sequence[MassBatch], tables) -> tuple[tuple[Element, ...], np.ndarray]:
+    """The conflict each element gets back, from the tables of :func:`_pcr_tables`."""
     n, values = _values(sources)
-    s = len(sources)
+    return _pcr_share_values(n, values, tables)
+
+
+def _pcr_share_values(n: int, values: Sequence[np.ndarray], tables) -> tuple[tuple, np.ndarray]:
+    """:func:`_pcr_shares` on the sources' (n, K_i) arrays."""
+    scatter, columns, positions, representative = tables
+    s = len(values)
     count = len(columns[0])
     shares = np.empty((n, len(scatter.elements)))
     for rows in row_chunks(n, count * (s + 2)):
@@ -513,7 +1057,67 @@ def _pcr(sources: Sequence[MassBatch], model: Model, rule: str) -> MassBatch:
         for i in range(s):
             entries[:, positions[i]] = factor * weights[i]
         shares[rows] = scatter.apply(entries)
-    return _add(model, consensus, scatter.elements, shares)
+    return scatter.elements, shares
+
+
+def _loop_pcr(sources: Sequence[MassBatch], direct: _Direct, rule: str) -> tuple[tuple[Element, ...], np.ndarray]:
+    """:func:`_pcr_shares` for one row and a few tuples, in plain Python, with the same operations in the same order."""
+    element_of: dict[int, Element] = {}
+    for source_codes, projected in zip(direct.encoding.codes, direct.projected):
+        for c, x in zip(source_codes, projected):
+            element_of.setdefault(c, x)
+    codes, shares = _pcr_loop(direct.encoding.codes, [b.values[0].tolist() for b in sources], rule,
+                              lambda c: element_of[c].sort_key)
+    return tuple(element_of[c] for c in codes), shares
+
+
+def _pcr_loop(codes: Sequence[Sequence[int]], rows: Sequence[list[float]], rule: str,
+              key) -> tuple[list[int], np.ndarray]:
+    """The conflict shares of one row: the targets' codes in canonical order (``key``) and their (1, E) sums.
+
+    ``codes`` identify the sources' focal elements (equal codes, equal elements; ∩ is ``&``).
+    """
+    s = len(codes)
+    entries: list[list[tuple[int, float]]] = [[] for _ in range(s)]
+    pcr5 = rule == "pcr5"
+    for columns in _tuples([len(c) for c in codes]):
+        meet = -1
+        for c, k in zip(codes, columns):
+            meet &= c[k]
+        if meet:
+            continue
+        masses = [row[k] for row, k in zip(rows, columns)]
+        prod = masses[0]
+        for m in masses[1:]:
+            prod *= m
+        targets = [c[k] for c, k in zip(codes, columns)]
+        if pcr5:
+            weights = []
+            for j in range(s):
+                w = 1.0 if targets.index(targets[j]) == j else 0.0
+                if w:
+                    for i in range(j, s):
+                        if targets[i] == targets[j]:
+                            w *= masses[i]
+                weights.append(w)
+        else:
+            weights = masses
+        total = weights[0]
+        for w in weights[1:]:
+            total += w
+        factor = prod / total if total > 0 else 0.0
+        for i in range(s):
+            entries[i].append((targets[i], factor * weights[i]))
+    groups: dict[int, list[float]] = {}
+    for slot in entries:
+        for target, value in slot:
+            group = groups.get(target)
+            if group is None:
+                groups[target] = [value]
+            else:
+                group.append(value)
+    present = sorted(groups, key=key)
+    return present, np.array([[_segment_sum(groups[c]) for c in present]])
 
 
 def _add(model: Model, base: MassBatch, elements: Sequence[Element], values: np.ndarray) -> MassBatch:
@@ -529,29 +1133,58 @@ def _add(model: Model, base: MassBatch, elements: Sequence[Element], values: np.
 
 @lru_cache(maxsize=512)
 def _pcr_kernel(plan: TuplePlan, rule: str):
+    """:func:`_pcr_tables` of a plan (cached with it)."""
+    conflict = np.flatnonzero(plan.conflicting)
+    unique, per_source = _element_codes(plan)
+    return _pcr_tables(tuple(c[conflict] for c in plan.columns), unique, per_source, rule)
+
+
+def _array_pcr_tables(direct: _Direct, rule: str):
+    """:func:`_pcr_tables` from the codes of the direct path (no plan)."""
+    arrays = [np.array(c, dtype=np.uint64) for c in direct.encoding.codes]
+    conflict = np.flatnonzero(tuple_codes(arrays, np.bitwise_and) == 0)
+    columns = tuple(c.astype(np.int64, copy=False) for c in np.unravel_index(conflict, direct.sizes))
+    index: dict[int, int] = {}
+    unique: list[Element] = []
+    per_source = []
+    for source_codes, projected in zip(direct.encoding.codes, direct.projected):
+        row = []
+        for c, x in zip(source_codes, projected):
+            k = index.get(c)
+            if k is None:
+                k = index[c] = len(unique)
+                unique.append(x)
+            row.append(k)
+        per_source.append(np.array(row, dtype=np.int64))
+    return _pcr_tables(columns, unique, per_source, rule)
+
+
+def _pcr_tables(columns: tuple[np.ndarray, ...], unique: list, per_source: list[np.ndarray], rule: str,
+                ranked: bool = False):
     """Tables for redistributing the conflicting tuples.
 
-    Returns the scatter over (conflicting tuple, slot) entries, the sources' columns at the
-    conflicting tuples, the positions of each slot's entries in scatter order, and (PCR5)
-    the group representative of every slot.
+    ``columns`` holds each source's column at every conflicting tuple, ``unique`` the
+    distinct focal elements under the fusion model and ``per_source`` the index of each
+    source's focal elements into it.  Returns the scatter over (conflicting tuple, slot)
+    entries, the columns, the positions of each slot's entries in scatter order, and
+    (PCR5) the group representative of every slot.  With ``ranked``, ``unique`` is in
+    canonical order already (its items need not be elements).
     """
-    s = len(plan.focal)
-    conflict = np.flatnonzero(plan.conflicting)
-    columns = tuple(c[conflict] for c in plan.columns)
-    codes = _element_codes(plan)
-    unique = codes[0]
-    slot_codes = [codes[1][i][columns[i]] for i in range(s)]          # each (Tc,)
-    scatter = Scatter.from_codes(unique, np.concatenate(slot_codes) if s else np.zeros(0, np.int64))
-    total = conflict.size * s
+    s = len(columns)
+    size = len(columns[0])
+    slot_codes = [per_source[i][columns[i]] for i in range(s)]          # each (Tc,)
+    codes = np.concatenate(slot_codes) if s else np.zeros(0, np.int64)
+    scatter = Scatter.from_ranks(unique, codes) if ranked else Scatter.from_codes(unique, codes)
+    total = size * s
     rank = np.empty(total, dtype=np.int64)
     rank[scatter.order] = np.arange(total)
-    positions = tuple(rank[i * conflict.size:(i + 1) * conflict.size] for i in range(s))
+    positions = tuple(rank[i * size:(i + 1) * size] for i in range(s))
     representative = None
     if rule == "pcr5":
         # rep[t, i]: the first slot of tuple t whose element equals slot i's element.
-        representative = np.empty((conflict.size, s), dtype=np.int64)
+        representative = np.empty((size, s), dtype=np.int64)
         for i in range(s):
-            rep = np.full(conflict.size, i, dtype=np.int64)
+            rep = np.full(size, i, dtype=np.int64)
             for j in range(i - 1, -1, -1):
                 rep = np.where(slot_codes[j] == slot_codes[i], j, rep)
             representative[:, i] = rep
@@ -592,6 +1225,12 @@ def pcr6(sources: Sequence[MassBatch], model: Model) -> MassBatch:
     for two sources.
     """
     return _pcr(sources, model, "pcr6")
+
+
+#: The built-in rules that :func:`_single` evaluates, by function (a rule registered anew under a name keeps its own).
+_SINGLE_RULES: dict[Callable, str] = {conjunctive: "meet", dsmc: "meet", dempster: "dempster", disjunctive: "join",
+                                      yager: "yager", dubois_prade: "dubois_prade", dsmh: "dsmh", pcr5: "pcr5",
+                                      pcr6: "pcr6"}
 
 
 # -- the R-weighted rule (SPEC A.4) ----------------------------------------------------------------
