@@ -25,7 +25,19 @@ __all__ = ["MassFunction"]
 Query = Union[Element, str]
 
 
-class MassFunction(Mapping):
+class _MassSlots(Mapping):
+    """The storage of :class:`MassFunction`, shared with :class:`_FreshMass`.
+
+    ``_focal`` (elements) or ``_masks`` (hypothesis bit masks of unions of hypotheses)
+    holds the focal elements, ``_values`` (array) or ``_floats`` (tuple) their masses; the
+    missing one of each pair is made from the other when first read.  With ``_loose``,
+    ``_masks`` and ``_floats`` are not yet in canonical order (they are sorted then too).
+    """
+
+    __slots__ = ("model", "_focal", "_values", "_batch", "_hash", "_masks", "_floats", "_loose")
+
+
+class MassFunction(_MassSlots):
     """A mass function m: D^Θ → [0, 1] with Σ m = 1 (W (1)).
 
     Parameters
@@ -60,7 +72,7 @@ class MassFunction(Mapping):
     0.8
     """
 
-    __slots__ = ("model", "_focal", "_values", "_batch", "_hash", "_masks", "_floats")
+    __slots__ = ()
 
     model: Model
 
@@ -73,64 +85,52 @@ class MassFunction(Mapping):
         context = model._unions
         if context is None:
             context = _union_context(model)
-        if not ((context and self._union_init(masses, model, context)) or self._plain_init(masses, model)):
+        if context:
+            # Unions of hypotheses ("a|c"), kept as bit masks and floats (see _MassSlots): a
+            # combination works on them alone, and one of a few focal elements costs less
+            # than making the elements or the array.  Anything else (intersections, element
+            # keys, "empty", a name twice, a bad mass) goes to the general constructors below.
+            get, bit, _ = context
+            masks = []
+            values = []
+            try:
+                for key, value in masses.items():
+                    mask = sum(map(get, key.split("|")))
+                    if mask.bit_count() != key.count("|") + 1 or type(value) is not float:
+                        break                                    # a name twice, or a mass to check
+                    masks.append(mask)
+                    values.append(value)
+            except (KeyError, AttributeError):
+                pass
+            if masks and len(masks) == len(masses):
+                # NaN and ±inf make the sum NaN or infinite; a negative mass fails min().
+                if len(set(masks)) == len(masks) and min(values) >= 0.0 \
+                        and abs(math.fsum(values) - 1.0) <= SUM_TOLERANCE:
+                    if 0.0 in values:
+                        masks = [m for m, v in zip(masks, values) if v > 0.0]
+                        values = [v for v in values if v > 0.0]
+                    self._set_unions(model, tuple(masks), tuple(values))
+                    return
+            elif _spaced_unions(self, masses, model, bit):
+                return
+        if not self._plain_init(masses, model):
             self._checked_init(masses, model, subnormal)
 
-    def _union_init(self, masses: Mapping[Query, float], model: Model, context: tuple) -> bool:
-        """Build from a mapping of unions of hypotheses (``"a|c"``), kept as bit masks; False otherwise.
-
-        The elements are made when :attr:`focal` is first read, and the array of masses
-        when :attr:`values` is: a combination of such mass functions works on the masks
-        and the floats alone (see :func:`belief.rules.combine`), and one of a few focal
-        elements costs less than making either.  Intersections, element keys, and
-        anything :meth:`_plain_init` would refuse give False before anything is set.
-        """
-        get, bit, rank = context
-        keys = list(masses)
-        try:
-            masks = [sum(map(get, key.split("|"))) for key in keys]
-        except (KeyError, AttributeError):
-            # A name with spaces around it; anything else (an operator other than "|", "empty",
-            # a key that is not a string) fails the look-up of a name again.
-            masks = []
-            for key in keys:
-                if type(key) is not str:
-                    return False
-                mask = 0
-                for part in key.split("|"):
-                    b = bit.get(part.strip())
-                    if b is None:
-                        return False
-                    mask += b
-                masks.append(mask)
-        # A hypothesis named twice in a key, or two keys for one element, go the general way.
-        for m, key in zip(masks, keys):
-            if m.bit_count() != key.count("|") + 1:
-                return False
-        if len(set(masks)) != len(masks):
-            return False
-        values = list(masses.values())
-        for v in values:
-            if type(v) is not float:
-                if not all(type(x) is not bool and isinstance(x, _NUMBERS) for x in values):
-                    return False
-                values = [float(x) for x in values]
-                break
-        # NaN and ±inf make the sum NaN or infinite; a negative mass fails min().
-        if not values or not min(values) >= 0.0 or not abs(math.fsum(values) - 1.0) <= SUM_TOLERANCE:
-            return False
-        items = sorted(zip([rank[m] for m in masks], masks, values))
-        if 0.0 in values:
-            items = [item for item in items if item[2] > 0.0]
-        _, masks, values = zip(*items)
-        object.__setattr__(self, "model", model)
-        object.__setattr__(self, "_focal", None)
-        object.__setattr__(self, "_values", None)
-        object.__setattr__(self, "_batch", None)
-        object.__setattr__(self, "_hash", None)
-        object.__setattr__(self, "_masks", masks)
-        object.__setattr__(self, "_floats", values)
-        return True
+    def _set_unions(self, model: Model, masks: tuple[int, ...], values: tuple[float, ...]) -> None:
+        """Hold unions of hypotheses in the order given (sorted when first read)."""
+        if type(self) is MassFunction:
+            # Plain stores on the twin class (see _from_masks), then back to MassFunction.
+            _set(self, "__class__", _FreshMass)
+            self.model = model
+            self._focal = self._values = self._batch = self._hash = None
+            self._masks = masks
+            self._floats = values
+            self._loose = True
+            self.__class__ = MassFunction
+        else:
+            for name, value in (("model", model), ("_focal", None), ("_values", None), ("_batch", None),
+                                ("_hash", None), ("_masks", masks), ("_floats", values), ("_loose", True)):
+                _set(self, name, value)
 
     def _plain_init(self, masses: Mapping[Query, float], model: Model) -> bool:
         """Build from a mapping that needs no merging, no ∅ and no error, in one pass; False otherwise.
@@ -198,6 +198,7 @@ class MassFunction(Mapping):
         object.__setattr__(self, "_hash", None)
         object.__setattr__(self, "_masks", None)
         object.__setattr__(self, "_floats", None)
+        object.__setattr__(self, "_loose", False)
         return True
 
     def _checked_init(self, masses: Mapping[Query, float], model: Model, subnormal: bool) -> None:
@@ -234,6 +235,7 @@ class MassFunction(Mapping):
         object.__setattr__(self, "_hash", None)
         object.__setattr__(self, "_masks", None)
         object.__setattr__(self, "_floats", None)
+        object.__setattr__(self, "_loose", False)
 
     @classmethod
     def _trusted(cls, model: Model, focal: tuple[Element, ...], values) -> "MassFunction":
@@ -242,31 +244,45 @@ class MassFunction(Mapping):
         return obj
 
     @classmethod
-    def _from_masks(cls, model: Model, masks: tuple[int, ...], values) -> "MassFunction":
-        """Wrap unions of hypotheses (bit masks, 0 for ∅) in canonical order and their masses, without copying.
+    def _from_masks(cls, model: Model, masks: tuple[int, ...], values, loose: bool = False) -> "MassFunction":
+        """Wrap unions of hypotheses (bit masks, 0 for ∅) and their masses, without copying.
 
-        ``values`` is a tuple of floats, or a fresh array that nothing else holds.
+        ``values`` is a tuple of floats, or a fresh array that nothing else holds.  Without
+        ``loose`` the masks are in canonical order; with it (tuples only) they are sorted when
+        first read.
         """
-        obj = object.__new__(cls)
-        object.__setattr__(obj, "model", model)
-        object.__setattr__(obj, "_focal", None)
+        # A twin class without MassFunction.__setattr__ takes plain stores (cheaper than
+        # object.__setattr__), then the object becomes a MassFunction: both share one layout.
+        obj = _new(_FreshMass)
+        obj.model = model
+        obj._focal = obj._batch = obj._hash = None
+        obj._masks = masks
+        obj._loose = loose
         if type(values) is tuple:
-            object.__setattr__(obj, "_values", None)
-            object.__setattr__(obj, "_floats", values)
+            obj._values = None
+            obj._floats = values
         else:
             values.flags.writeable = False
-            object.__setattr__(obj, "_values", values)
-            object.__setattr__(obj, "_floats", None)
-        object.__setattr__(obj, "_batch", None)
-        object.__setattr__(obj, "_hash", None)
-        object.__setattr__(obj, "_masks", masks)
+            obj._values = values
+            obj._floats = None
+        obj.__class__ = MassFunction
         return obj
+
+    def _settle(self) -> None:
+        """Put loose masks and floats in canonical order (:func:`~belief.plan.union_ranks`)."""
+        rank = union_ranks(len(self.model.frame))[2]
+        items = sorted(zip([rank[m] for m in self._masks], self._masks, self._floats))
+        object.__setattr__(self, "_masks", tuple([m for _, m, _ in items]))
+        object.__setattr__(self, "_floats", tuple([v for _, _, v in items]))
+        object.__setattr__(self, "_loose", False)
 
     @property
     def focal(self) -> tuple[Element, ...]:
         """The focal elements, in canonical order (:attr:`Element.sort_key`)."""
         focal = self._focal
         if focal is None:
+            if self._loose:
+                self._settle()
             focal = tuple(union_elements(self.model.frame, self._masks))
             object.__setattr__(self, "_focal", focal)
         return focal
@@ -276,13 +292,17 @@ class MassFunction(Mapping):
         """The masses of the focal elements, in their order (a read-only array)."""
         values = self._values
         if values is None:
+            if self._loose:
+                self._settle()
             values = np.array(self._floats, dtype=np.float64)
             values.flags.writeable = False
             object.__setattr__(self, "_values", values)
         return values
 
     def _union_masks(self) -> tuple[int, ...] | None:
-        """The focal elements as hypothesis bit masks, if every one is a union of hypotheses (or ∅)."""
+        """The focal elements as hypothesis bit masks in canonical order, if every one is a union of hypotheses."""
+        if self._loose:
+            self._settle()
         masks = self._masks
         if masks is None:
             out = []
@@ -299,7 +319,9 @@ class MassFunction(Mapping):
         return masks
 
     def _union_floats(self) -> tuple[float, ...]:
-        """The masses as a tuple of floats."""
+        """The masses as a tuple of floats, in the order of :meth:`_union_masks`."""
+        if self._loose:
+            self._settle()
         floats = self._floats
         if floats is None:
             floats = tuple(self._values.tolist())
@@ -575,8 +597,53 @@ class MassFunction(Mapping):
 _NUMBERS = (int, float, np.integer, np.floating)
 
 
+class _FreshMass(_MassSlots):
+    """A mass function under construction (see :meth:`MassFunction._from_masks`)."""
+
+    __slots__ = ()
+    # Not abstract, so that object.__new__ makes one; it is a MassFunction before anyone sees it.
+    __getitem__ = __iter__ = __len__ = None
+
+
+_new = object.__new__
+_set = object.__setattr__
+
+
+def _spaced_unions(mass: MassFunction, masses: Mapping, model: Model, bit: dict[str, int]) -> bool:
+    """Unions of hypotheses for ``MassFunction.__init__`` with spaces around the names, or masses of other number
+    types (ints, numpy scalars); False, with nothing set, for anything else."""
+    masks = []
+    values = []
+    for key, value in masses.items():
+        if type(key) is not str:
+            return False
+        parts = key.split("|")
+        mask = 0
+        for part in parts:
+            b = bit.get(part.strip())
+            if b is None:
+                return False
+            mask += b
+        if mask.bit_count() != len(parts):
+            return False
+        if type(value) is not float:
+            if type(value) is bool or not isinstance(value, _NUMBERS):
+                return False
+            value = float(value)
+        masks.append(mask)
+        values.append(value)
+    if not masks or len(set(masks)) != len(masks) or not min(values) >= 0.0 \
+            or not abs(math.fsum(values) - 1.0) <= SUM_TOLERANCE:
+        return False
+    if 0.0 in values:
+        masks = [m for m, v in zip(masks, values) if v > 0.0]
+        values = [v for v in values if v > 0.0]
+    mass._set_unions(model, tuple(masks), tuple(values))
+    return True
+
+
 def _union_context(model: Model) -> tuple | bool:
-    """What :meth:`MassFunction._union_init` needs of a model, kept on it: or False where it does not apply.
+    """What :class:`MassFunction` needs to read unions of hypotheses under a model (kept on it), or False.
 
     It applies to frames of up to :data:`~belief.plan.RANK_TABLE_WIDTH` hypotheses whose
     model declares no hypothesis empty on its own (a union of hypotheses is then its own

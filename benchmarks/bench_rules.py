@@ -90,10 +90,10 @@ SEED = 20_240_611
 
 FULL = {"a_sizes": (8, 32, 128), "b_sizes": tuple(range(2, 11)), "c_rows": 100_000, "c_peer_rows": 1_000,
         "d_rows": 10_000, "d_peer_rows": 100, "e_rows": 10_000, "cold": 5, "warm": 5, "e_warm": 25,
-        "general_cold": 3, "general_warm": 5, "peer_budget": 4.0}
+        "general_cold": 3, "general_warm": 5, "peer_budget": 4.0, "single_cold": 21, "single_warm": 21}
 QUICK = {"a_sizes": (8, 32), "b_sizes": tuple(range(2, 7)), "c_rows": 10_000, "c_peer_rows": 200,
          "d_rows": 1_000, "d_peer_rows": 10, "e_rows": 1_000, "cold": 3, "warm": 3, "e_warm": 3,
-         "general_cold": 1, "general_warm": 2, "peer_budget": 1.0}
+         "general_cold": 1, "general_warm": 2, "peer_budget": 1.0, "single_cold": 5, "single_warm": 5}
 
 # Targets (on warm times: plan compiled and cached).
 A_K, A_RATIO = 128, 10.0
@@ -272,27 +272,75 @@ def timed(function, argument) -> tuple[float, object]:
 
 
 # -- measurements (each runs in a fresh process) -----------------------------------------------------
-def measure_single(library: str, case: str, rule: str, size: int, cold: int, warm: int, budget: float) -> dict:
-    """Cases (a) and (b): one combination per call."""
+def measure_single(case: str, rule: str, size: int, libraries: list[str], cold: int, warm: int,
+                   budget: float) -> dict:
+    """Cases (a) and (b): one combination per call, every library in this process, taking turns.
+
+    A cold call builds the sources from their dicts (focal elements that the process has
+    not seen) and combines them; the build and the combination are timed apart and
+    together.  A warm call combines the sources of the library's last cold call again.
+    The libraries take turns call by call (the first in the turn rotates), so that a load
+    that comes and goes on the machine weighs on all of them alike.  A peer stops once
+    its calls took ``budget`` seconds (after at least one cold call).
+    """
     samples = inputs_a(size, cold + 1) if case == "a" else inputs_b(size, cold + 1)
-    lib = Library(library, "shafer10" if case == "a" else "shafer3")
-    call = lib.combiner(rule)
-    sources = [[lib.source(s) for s in sample] for sample in samples]
-    first, _ = timed(call, sources[0])                    # untimed in the figures: lazy initialisation
-    cold_times, results = [], []
-    for sample in sources[1:]:
-        seconds, result = timed(call, sample)
-        cold_times.append(seconds)
-        results.append(lib.read(result))
-        if library != "belief" and sum(cold_times) > budget:
-            break
-    warm_times = []
-    if library == "belief":
-        last = sources[len(cold_times)]
-        warm_times = [timed(call, last)[0] for _ in range(warm)]
-    return {"first_s": first, "cold_s": statistics.median(cold_times), "cold_runs": len(cold_times),
-            "warm_s": statistics.median(warm_times) if warm_times else None, "warm_runs": len(warm_times),
-            "results": results}
+    libs = {name: Library(name, "shafer10" if case == "a" else "shafer3") for name in libraries}
+    calls = {name: lib.combiner(rule) for name, lib in libs.items()}
+    data = {name: {"build": [], "combine": [], "total": [], "warm": [], "focal": [], "results": {}, "spent": 0.0,
+                   "last": None} for name in libraries}
+    for name, lib in libs.items():                     # untimed: lazy initialisation, on other inputs
+        start = time.perf_counter()
+        calls[name]([lib.source(masses) for masses in samples[0]])
+        data[name]["first_s"] = time.perf_counter() - start
+
+    def active(name):
+        d = data[name]
+        return name == "belief" or not d["total"] or d["spent"] <= budget
+
+    for turn, sample in enumerate(samples[1:]):
+        shift = turn % len(libraries)
+        for name in libraries[shift:] + libraries[:shift]:
+            if not active(name):
+                continue
+            lib, d = libs[name], data[name]
+            gc.collect()
+            t0 = time.perf_counter()
+            sources = [lib.source(masses) for masses in sample]
+            t1 = time.perf_counter()
+            result = calls[name](sources)
+            t2 = time.perf_counter()
+            d["build"].append(t1 - t0)
+            d["combine"].append(t2 - t1)
+            d["total"].append(t2 - t0)
+            d["spent"] += t2 - t0
+            d["last"] = sources
+            if name == "belief":                       # the focal elements are made when first read
+                t3 = time.perf_counter()
+                result.focal
+                d["focal"].append(time.perf_counter() - t3)
+            d["results"][turn] = lib.read(result)
+    for turn in range(warm):
+        shift = turn % len(libraries)
+        for name in libraries[shift:] + libraries[:shift]:
+            d = data[name]
+            if name != "belief" and d["spent"] > budget:
+                continue
+            gc.collect()
+            t0 = time.perf_counter()
+            calls[name](d["last"])
+            seconds = time.perf_counter() - t0
+            d["warm"].append(seconds)
+            d["spent"] += seconds
+    out = {}
+    for name, d in data.items():
+        warm_times = d["warm"] or d["combine"]         # a peer keeps nothing from call to call
+        out[name] = {"first_s": d["first_s"], "cold_s": statistics.median(d["total"]),
+                     "build_s": statistics.median(d["build"]), "combine_s": statistics.median(d["combine"]),
+                     "cold_runs": len(d["total"]), "warm_s": statistics.median(warm_times),
+                     "warm_runs": len(d["warm"]), "results": d["results"]}
+        if d["focal"]:
+            out[name]["focal_s"] = statistics.median(d["focal"])
+    return out
 
 
 def measure_batch_belief(case: str, rule: str, rows: int, check_rows: int, cold: int, warm: int) -> dict:
@@ -420,6 +468,35 @@ def compare(row: dict, belief: dict) -> None:
     del belief["results"]
 
 
+def compare_single(row: dict) -> None:
+    """Agreement of cases (a) and (b): belief against each peer on every sample both combined."""
+    row["agreement"] = {}
+    ours = row["belief"].pop("results")
+    for peer, data in row["peers"].items():
+        if data is None:
+            continue
+        theirs = data.pop("results")
+        common = sorted(set(ours) & set(theirs))
+        worst = deviation([ours[k] for k in common], [theirs[k] for k in common]) if common else float("inf")
+        row["agreement"][peer] = {"max_abs_diff": worst, "compared": len(common), "agree": worst <= TOLERANCE}
+
+
+def add_single_ratios(row: dict) -> None:
+    """Cold: the fastest peer's build and combination over belief's; warm: the combination alone."""
+    timed_peers = {p: d for p, d in row["peers"].items() if d is not None}
+    b = row["belief"]
+    if not timed_peers:
+        row["fastest_peer"] = row["ratio_cold"] = row["ratio_warm"] = None
+        return
+    cold_peer = min(timed_peers, key=lambda p: timed_peers[p]["cold_s"])
+    warm_peer = min(timed_peers, key=lambda p: timed_peers[p]["warm_s"])
+    row["fastest_peer"] = cold_peer
+    row["fastest_warm_peer"] = warm_peer
+    row["ratio_cold"] = timed_peers[cold_peer]["cold_s"] / b["cold_s"]
+    row["ratio_warm"] = timed_peers[warm_peer]["warm_s"] / b["warm_s"]
+    row["ratio_cold_combine"] = min(d["combine_s"] for d in timed_peers.values()) / b["combine_s"]
+
+
 def fastest(row: dict) -> tuple[str | None, float | None]:
     """The fastest peer and its time per unit (per call, or per row for the batch cases)."""
     best = None
@@ -469,10 +546,15 @@ def run_case(case: str, sizes: dict, have: dict, log) -> list[dict]:
         supported = [p for p in SUPPORTS[(case, rule)] if have[p]]
         if case in "ab":
             row["tuples"] = size * size if case == "a" else 3 ** size
-            belief = in_fresh_process(measure_single, "belief", case, rule, size, sizes["cold"], sizes["warm"], 0.0)
+            measured = in_fresh_process(measure_single, case, rule, size, ["belief"] + supported,
+                                        sizes["single_cold"], sizes["single_warm"], sizes["peer_budget"])
+            row["belief"] = measured["belief"]
             for peer in PEERS:
-                row["peers"][peer] = (in_fresh_process(measure_single, peer, case, rule, size, sizes["cold"], 0,
-                                                       sizes["peer_budget"]) if peer in supported else None)
+                row["peers"][peer] = measured.get(peer)
+            compare_single(row)
+            add_single_ratios(row)
+            out.append(row)
+            continue
         else:
             peer_rows = sizes[f"{case}_peer_rows"]
             check = peer_rows if supported else 1
@@ -535,13 +617,29 @@ def targets(rows: list[dict], cases: str, have: dict) -> list[dict]:
         target(f"(e) {rule}, tracker reading of {E_ROWS:,} rows, closed forms: warm >= {E_RATES[rule]:,.0f} rows/s",
                speed, speed is not None and speed >= E_RATES[rule], r and E_ROWS / r["belief"]["cold_s"], skip,
                "rows/s")
+    for r in rows:
+        if r["case"] not in "ab" or r.get("fastest_peer") is None:
+            continue
+        name = f"({r['case']}) {r['rule']}, {'k' if r['case'] == 'a' else 's'} = {r['size']}"
+        target(f"{name}: cold call (build from dicts + combine) >= 1x the fastest peer ({r['fastest_peer']})",
+               r["ratio_cold"], r["ratio_cold"] >= 1.0)
+    for r in rows:
+        if r["case"] == "e" or r.get("fastest_peer") is None or r.get("ratio_warm") is None:
+            continue
+        size = {"a": "k", "b": "s"}.get(r["case"], "rows")
+        peer = r.get("fastest_warm_peer", r["fastest_peer"])
+        target(f"({r['case']}) {r['rule']}, {size} = {r['size']:,}: warm call >= 1x the fastest peer ({peer})",
+               r["ratio_warm"], r["ratio_warm"] >= 1.0)
     e_rows = [r for r in rows if r["case"] == "e"]
     if e_rows:
         worst = max(r["max_abs_diff"] for r in e_rows)
         target("(e) the closed forms read what the general engine reads (|Δ| <= 1e-12)", worst, worst <= 1e-12,
                None, None, "max |Δ|")
     checks = [a for r in rows for a in r["agreement"].values()]
-    target(f"results agree with every peer that implements the case (|Δ| <= {TOLERANCE:g})",
+    differ = [f"({r['case']}) {r['rule']} {r['size']:,} vs {p}" for r in rows for p, a in r["agreement"].items()
+              if not a["agree"]]
+    target(f"results agree with every peer that implements the case (|Δ| <= {TOLERANCE:g})"
+           + (f"; they differ in {', '.join(differ)}" if differ else ""),
            sum(a["agree"] for a in checks), all(a["agree"] for a in checks), None,
            None if checks else "no peer installed", f"of {len(checks)} comparisons")
     return found
@@ -585,15 +683,20 @@ def print_report(rows: list[dict], found: list[dict], peers: list[str], sizes: d
         d = row["peers"].get(peer)
         if d is None:
             return "-"
-        return ms(d["cold_s"]) + ("" if d["cold_runs"] >= sizes["cold"] else f" ({d['cold_runs']})")
+        cell = f"{ms(d['cold_s'])} / {ms(d['warm_s'])}"
+        return cell + ("" if d["cold_runs"] >= sizes["single_cold"] else f" ({d['cold_runs']})")
+
+    def belief_cells(r):
+        b = r["belief"]
+        return [ms(b["cold_s"]), ratio(r["ratio_cold"]), ms(b["build_s"]), ms(b["combine_s"]),
+                ms(b.get("focal_s")), ms(b["warm_s"]), ratio(r["ratio_warm"])]
 
     by_case = {c: [r for r in rows if r["case"] == c] for c in "abcde"}
+    belief_header = [("cold ms", 9), ("x", 7), ("build", 7), ("comb.", 7), ("focal", 7), ("warm ms", 9), ("x", 7)]
     if by_case["a"]:
         print("(a) Dempster's rule, two sources of k random focal elements, 10 hypotheses, Shafer's model")
-        header = [("k", 4), ("tuples", 7), ("cold ms", 9), ("x", 7), ("warm ms", 9), ("x", 7)]
-        header += [(f"{p} ms", 14) for p in peers]
-        print_table(header, [[str(r["size"]), str(r["tuples"]), ms(r["belief"]["cold_s"]), ratio(r["ratio_cold"]),
-                              ms(r["belief"]["warm_s"]), ratio(r["ratio_warm"])] + [peer_cell(r, p) for p in peers]
+        header = [("k", 4), ("tuples", 7)] + belief_header + [(f"{p} cold / warm ms", 24) for p in peers]
+        print_table(header, [[str(r["size"]), str(r["tuples"])] + belief_cells(r) + [peer_cell(r, p) for p in peers]
                              for r in by_case["a"]])
         for r in by_case["a"]:
             print(f"  k = {r['size']}: {agreement(r, peers)}")
@@ -601,12 +704,19 @@ def print_report(rows: list[dict], found: list[dict], peers: list[str], sizes: d
     if by_case["b"]:
         print("(b) joint PCR5 / PCR6 of s near-Bayesian sources on 3 hypotheses, 3 focal elements each "
               "(only evidencelib implements them)")
-        header = [("s", 3), ("tuples", 7), ("rule", 5), ("cold ms", 9), ("x", 7), ("warm ms", 9), ("x", 7)]
+        header = [("s", 3), ("tuples", 7), ("rule", 5)] + belief_header
         shown = [p for p in peers if p == "evidencelib"]
-        header += [(f"{p} ms", 16) for p in shown] + [("agreement", 28)]
-        print_table(header, [[str(r["size"]), str(r["tuples"]), r["rule"], ms(r["belief"]["cold_s"]),
-                              ratio(r["ratio_cold"]), ms(r["belief"]["warm_s"]), ratio(r["ratio_warm"])]
+        header += [(f"{p} cold / warm ms", 26) for p in shown] + [("agreement", 28)]
+        print_table(header, [[str(r["size"]), str(r["tuples"]), r["rule"]] + belief_cells(r)
                              + [peer_cell(r, p) for p in shown] + [agreement(r, shown)] for r in by_case["b"]])
+        print()
+    if by_case["a"] or by_case["b"]:
+        print("    cold = build the sources from dicts of new focal elements + combine (median of "
+              f"{sizes['single_cold']}); build, comb. = its two parts;")
+        print("    focal = belief's first read of the result's focal elements (made then; not in cold); warm = "
+              f"combine the last sources again (median of {sizes['single_warm']});")
+        print("    x = the fastest peer's time / belief's; a peer's count in brackets = fewer cold calls "
+              f"(capped at about {sizes['peer_budget']:g} s)")
         print()
     if by_case["c"]:
         r = by_case["c"][0]
@@ -663,14 +773,14 @@ def print_report(rows: list[dict], found: list[dict], peers: list[str], sizes: d
         print("    x warm = general engine's warm time / closed forms' warm time; \"all τ\": Bel, Pls, BetP of every "
               "target instead of select= (for information)")
         print()
-    print("Targets (on warm times, plan cached; cold figures, which include compiling the plan, in brackets):")
+    print("Targets (cold: fresh focal elements, building the sources included; warm: the combination again):")
     for t in found:
         value, unit = t["value"], t["unit"]
         if t["status"] == "SKIP":
             print(f"{t['status']:<5} {t['target']} ({t['note']})")
             continue
         if unit == "x":
-            shown = f"{ratio(value)} (cold {ratio(t['cold_value'])})"
+            shown = ratio(value) + ("" if t["cold_value"] is None else f" (cold {ratio(t['cold_value'])})")
         elif unit in ("pairs/s", "rows/s"):
             shown = f"{rate(value)} {unit} (cold {rate(t['cold_value'])} {unit})"
         elif unit == "max |Δ|":
@@ -733,8 +843,11 @@ def main(argv: list[str] | None = None) -> int:
     else:
         print_report(rows, found, peers, sizes)
         print(f"\n(total {time.perf_counter() - start:.0f} s)")
-    failed = any(t["status"] == "FAIL" for t in found)
-    return 1 if failed and args.check else 0
+    failed = [t["target"] for t in found if t["status"] == "FAIL"]
+    if failed and args.check:
+        print("check failed: " + "; ".join(failed), file=sys.stderr)
+        return 1
+    return 0
 
 
 if __name__ == "__main__":
