@@ -20,6 +20,8 @@ a person reads at a glance:
 * mass functions towards one focal element (a categorical mass function), and weights
   towards 1, that is towards equal masses.
 
+:func:`simplest` shows where a strategy shrinks to.
+
 The law checker
 ---------------
 :func:`check_rule` runs Hypothesis over the laws that a combination rule of the registry
@@ -65,7 +67,7 @@ except ImportError:  # pragma: no cover - an older or newer Hypothesis without i
     with_reporter = None
 
 __all__ = ["KINDS", "LAWS", "MAX_WEIGHT", "RuleReport", "bayesian_sources", "check_rule", "elements", "frames",
-           "mass_batches", "mass_functions", "models"]
+           "mass_batches", "mass_functions", "models", "simplest"]
 
 #: The kinds of model that :func:`models` draws.
 KINDS = ("free", "shafer", "hybrid", "tracking")
@@ -98,12 +100,43 @@ def frames(min_n: int = 1, max_n: int = 4) -> SearchStrategy:
 
     Examples
     --------
-    >>> from hypothesis import find
-    >>> find(frames(2, 4), lambda frame: True)
+    >>> simplest(frames(2, 4))
     Frame(['t1', 't2'])
     """
     _check_range("min_n", "max_n", min_n, max_n, lowest=1)
     return st.integers(min_n, max_n).map(Frame.numbered)
+
+
+def simplest(strategy: SearchStrategy, condition: Callable[[Any], bool] | None = None) -> Any:
+    """The simplest value of a strategy (that satisfies ``condition``): where Hypothesis shrinks to.
+
+    Hypothesis's ``find`` without its example database and its explain phase, which would
+    only slow it down here.
+
+    Parameters
+    ----------
+    strategy : SearchStrategy
+    condition : callable, optional
+        A predicate on the values; by default every value qualifies.
+
+    Returns
+    -------
+    object
+        The shrunk value.
+
+    Raises
+    ------
+    hypothesis.errors.NoSuchExample
+        If no value drawn satisfies ``condition``.
+
+    Examples
+    --------
+    >>> from belief import Frame, Model
+    >>> simplest(mass_functions(Model.shafer(Frame(["a", "b"]))), lambda m: m.bel("a") < 1)
+    MassFunction({'b': 1.0}, model=Model.shafer(Frame(['a', 'b'])))
+    """
+    quick = hypothesis.settings(database=None, phases=[hypothesis.Phase.generate, hypothesis.Phase.shrink])
+    return hypothesis.find(strategy, condition if condition is not None else lambda value: True, settings=quick)
 
 
 def models(frame_or_strategy: Union[Frame, SearchStrategy, None] = None,
@@ -131,11 +164,10 @@ def models(frame_or_strategy: Union[Frame, SearchStrategy, None] = None,
 
     Examples
     --------
-    >>> from hypothesis import find
     >>> from belief import Frame
-    >>> find(models(Frame(["a", "b", "c"])), lambda model: True)
+    >>> simplest(models(Frame(["a", "b", "c"])))
     Model.free(Frame(['a', 'b', 'c']))
-    >>> find(models(Frame(["a", "b", "c"]), kinds=("hybrid",)), lambda model: True)
+    >>> simplest(models(Frame(["a", "b", "c"]), kinds=("hybrid",)))
     Model.hybrid(Frame(['a', 'b', 'c']), empty=['a&b'])
     """
     kinds = _check_kinds(kinds)
@@ -203,12 +235,11 @@ def elements(model: Model, *, max_terms: int | None = None) -> SearchStrategy:
 
     Examples
     --------
-    >>> from hypothesis import find
     >>> from belief import Frame, Model
     >>> shafer = Model.shafer(Frame(["a", "b", "c"]))
-    >>> find(elements(shafer), lambda element: True)
+    >>> simplest(elements(shafer))
     Element('a')
-    >>> find(elements(shafer), lambda element: len(element.terms) == 3)
+    >>> simplest(elements(shafer), lambda element: len(element.terms) == 3)
     Element('a|b|c')
     """
     if not isinstance(model, Model):
@@ -272,14 +303,13 @@ def mass_functions(model: ModelLike = None, *, max_focal: int = 4, subnormal: bo
 
     Examples
     --------
-    >>> from hypothesis import find
     >>> from belief import Frame, Model
     >>> shafer = Model.shafer(Frame(["a", "b", "c"]))
-    >>> find(mass_functions(shafer), lambda m: True)
+    >>> simplest(mass_functions(shafer))
     MassFunction({'a': 1.0}, model=Model.shafer(Frame(['a', 'b', 'c'])))
-    >>> find(mass_functions(shafer), lambda m: len(m) == 2)
-    MassFunction({'a': 0.5, 'b': 0.5}, model=Model.shafer(Frame(['a', 'b', 'c'])))
-    >>> find(mass_functions(shafer, subnormal=True, nondogmatic=True), lambda m: True)
+    >>> simplest(mass_functions(shafer), lambda m: m.bel("a") < 1)
+    MassFunction({'b': 1.0}, model=Model.shafer(Frame(['a', 'b', 'c'])))
+    >>> simplest(mass_functions(shafer, subnormal=True, nondogmatic=True))
     MassFunction({'empty': 0.3333333333333333, 'a': 0.3333333333333333, 'a|b|c': 0.3333333333333333}, \
 model=Model.shafer(Frame(['a', 'b', 'c'])))
     """
@@ -352,12 +382,11 @@ def mass_batches(model: ModelLike = None, *, rows: Union[int, tuple[int, int]] =
 
     Examples
     --------
-    >>> from hypothesis import find
     >>> from belief import Frame, Model
     >>> shafer = Model.shafer(Frame(["a", "b"]))
-    >>> batch = find(mass_batches(shafer, rows=3), lambda b: len(b.focal) == 2)
+    >>> batch = simplest(mass_batches(shafer, rows=3, subnormal=True))
     >>> [str(e) for e in batch.focal], batch.values.tolist()
-    (['a', 'b'], [[1.0, 0.0], [1.0, 0.0], [1.0, 0.0]])
+    (['empty', 'a'], [[1.0, 0.0], [1.0, 0.0], [1.0, 0.0]])
     """
     low, high = _bounds("rows", rows)
     _check_positive("max_focal", max_focal)
@@ -410,9 +439,8 @@ def bayesian_sources(model: ModelLike = None, *, count: Union[int, tuple[int, in
 
     Examples
     --------
-    >>> from hypothesis import find
     >>> from belief import Model
-    >>> sources = find(bayesian_sources(Model.for_targets(2), rows=2), lambda sources: True)
+    >>> sources = simplest(bayesian_sources(Model.for_targets(2), rows=2))
     >>> len(sources), [b.values.tolist() for b in sources]
     (2, [[[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]], [[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]]])
     """
@@ -779,7 +807,7 @@ class _Checker:
             if not isinstance(raw, _Refusal):
                 for k, value in enumerate(raw.values[0].tolist()):
                     if not value >= -self.tol:
-                        self.fail("no negative mass", f"{what} gives m({raw.focal[k]}) = {value!r}")
+                        self.fail("no negative mass", f"{what} gives m({raw.focal[k]}) = {value:.12g}")
         rows = result.values.reshape(1, -1) if isinstance(result, MassFunction) else result.values
         empty = [k for k, e in enumerate(result.focal) if not e.terms]
         for k, row in enumerate(rows.tolist()):
@@ -787,13 +815,13 @@ class _Checker:
             negative = [(result.focal[j], v) for j, v in enumerate(row) if not v >= -self.tol]
             if negative:
                 element, value = negative[0]
-                self.fail("no negative mass", f"{where} gives m({element}) = {value!r}")
+                self.fail("no negative mass", f"{where} gives m({element}) = {value:.12g}")
             total = math.fsum(row)
             if not abs(total - 1.0) <= self.tol:
-                self.fail("mass conservation", f"the masses of {where} sum to {total!r}, not 1"
+                self.fail("mass conservation", f"the masses of {where} sum to {total:.12g}, not 1"
                           + (" (m(∅) included)" if self.info.keeps_conflict else ""))
             if empty and not self.info.keeps_conflict and not row[empty[0]] <= self.tol:
-                self.fail("mass conservation", f"{where} puts {row[empty[0]]!r} on ∅, but the rule is registered "
+                self.fail("mass conservation", f"{where} puts {row[empty[0]]:.12g} on ∅, but the rule is registered "
                           "with keeps_conflict=False (its masses must sum to 1 without m(∅))")
 
     def outcome(self, *sources, what: str):

@@ -5,6 +5,10 @@ non-empty set S of hypotheses (an int bit mask), an element of D^Θ is the set o
 contains (region S is in the element iff one of its conjunctions is a subset of S), and a
 model is the set of regions it allows.  Nothing here relies on the library's own ∩, ∪, ⊆,
 reduction or cardinality code, so the tests can compare the library against it.
+
+The strategies that only draw library objects come from :mod:`belief.testing`, the ones users
+get (:func:`frames`); those here pair each drawn object with its literal reference (a model
+with its allowed regions, a mass function with the regions of its focal elements).
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from hypothesis import assume
 from hypothesis import strategies as st
 
 from belief import Element, Frame, MassFunction, Model
+from belief import testing
 
 # -- literal Venn-region semantics ---------------------------------------------------------------
 
@@ -98,7 +103,8 @@ class ModelCase:
 
 
 def frames(min_n: int = 1, max_n: int = 5):
-    return st.integers(min_n, max_n).map(Frame.numbered)
+    """Frames t1 .. tn, min_n ≤ n ≤ max_n (:func:`belief.testing.frames`, up to five hypotheses by default)."""
+    return testing.frames(min_n, max_n)
 
 
 def conjunctions(n: int):
