@@ -129,9 +129,11 @@ def read_detections(path: str | PathLike[str], *, frame_count: int | None = None
     DetectionFileError
         The file is missing, unreadable or holds no detection, or a line (named with its
         number) has fewer than 7 fields, a field that is not a number, a frame that is not
-        an integer of at least 1 or is after ``frame_count``, a corner that is not finite, a
-        width or height that is not a positive finite number, a score outside [0, 1], or a
-        box wholly outside the image.
+        an integer from 1 to :data:`~belief_tracking.motfiles.MAX_FRAME` or is after
+        ``frame_count``, a corner that is not finite, a width or height that is not a positive
+        finite number, a coordinate or size beyond
+        :data:`~belief_tracking.motfiles.MAX_COORDINATE` pixels, a score outside [0, 1], or
+        a box wholly outside the image.
 
     Examples
     --------
@@ -148,7 +150,7 @@ def read_detections(path: str | PathLike[str], *, frame_count: int | None = None
     belief_tracking.errors.DetectionFileError: .../det.txt, line 1: the score 1.5 is outside [0, 1] ...
     """
     from belief.textfiles import read_text
-    from belief_tracking.motfiles import text_lines
+    from belief_tracking.motfiles import check_box, check_frame, text_lines
 
     name = str(path)
     text = read_text(path, "detection file", DetectionFileError, encoding="utf-8-sig")
@@ -167,8 +169,7 @@ def read_detections(path: str | PathLike[str], *, frame_count: int | None = None
             except ValueError:
                 raise DetectionFileError(f"{where}: field {column} is not a number: {field!r}") from None
         frame, _, x, y, w, h, score = values
-        if not math.isfinite(frame) or frame != int(frame) or frame < 1:
-            raise DetectionFileError(f"{where}: the frame must be an integer of at least 1, got {fields_[0]}")
+        check_frame(frame, where, DetectionFileError, text=fields_[0])
         if frame_count is not None and frame > frame_count:
             raise DetectionFileError(f"{where}: frame {int(frame)} is after the end of the video "
                                      f"({int(frame_count)} frames)")
@@ -176,6 +177,7 @@ def read_detections(path: str | PathLike[str], *, frame_count: int | None = None
             raise DetectionFileError(f"{where}: the corner {fields_[2]},{fields_[3]} is not finite")
         if not (math.isfinite(w) and math.isfinite(h) and w > 0 and h > 0):
             raise DetectionFileError(f"{where}: the box size {fields_[4]} x {fields_[5]} is not positive and finite")
+        check_box(x, y, w, h, where, DetectionFileError)
         if not 0.0 <= score <= 1.0:  # NaN fails both comparisons
             raise DetectionFileError(f"{where}: the score {fields_[6]} is outside [0, 1] (a detector's own "
                                      "scale must be mapped to [0, 1] first)")

@@ -33,6 +33,7 @@ import numpy as np
 from belief_tracking.boxes import check_boxes, iou
 from belief_tracking.errors import TrackingError
 from belief_tracking.extras import require
+from belief_tracking.motfiles import MAX_COORDINATE, MAX_FRAME
 
 __all__ = [
     "Scores",
@@ -247,6 +248,10 @@ def _track_table(rows: Any, what: str, allow_empty: bool) -> np.ndarray:
         raise TrackingError(f"{what} holds a value that is not finite")
     if (array[:, :2] != np.round(array[:, :2])).any():
         raise TrackingError(f"{what} has a frame or id that is not an integer")
+    if (np.abs(array[:, :2]) > MAX_FRAME).any():
+        raise TrackingError(f"{what} has a frame or id beyond {MAX_FRAME}")
+    if (np.abs(array[:, [_X, _Y, _W, _H]]) > MAX_COORDINATE).any():
+        raise TrackingError(f"{what} has a box coordinate or size beyond {MAX_COORDINATE:g} pixels")
     if (array[:, [_W, _H]] < 0).any():
         raise TrackingError(f"{what} has a box with a negative width or height")
     keys = np.unique(array[:, :2], axis=0)

@@ -39,7 +39,7 @@ from belief_tracking import checks
 from belief_tracking.boxes import check_boxes, pixel_ranges
 from belief_tracking.errors import InitError, TrackingError
 from belief_tracking.extras import require
-from belief_tracking.motfiles import read_mot
+from belief_tracking.motfiles import MAX_COORDINATE, MAX_FRAME, MAX_ID, check_box, check_frame, read_mot
 
 __all__ = [
     "TargetInit",
@@ -160,6 +160,17 @@ def init_from_gt(gt: str | PathLike[str] | np.ndarray, source: str | None = None
         rows, name = read_mot(gt), source or str(gt)
     if rows.ndim != 2 or rows.shape[0] == 0 or rows.shape[1] < 6:
         raise InitError(f"{name}: no boxes to initialise the targets from")
+    if not np.isfinite(rows[:, :6]).all():
+        raise InitError(f"{name}: a frame, id or box is not finite")
+    frames, ids = rows[:, 0], rows[:, 1]
+    bad = ((frames != np.round(frames)) | (frames < 1) | (frames > MAX_FRAME) | (ids != np.round(ids))
+           | (np.abs(ids) > MAX_ID) | (np.abs(rows[:, 2:6]) > MAX_COORDINATE).any(axis=1))
+    for row in rows[bad][:1]:
+        check_frame(row[0], f"{name}, row {int(np.flatnonzero(bad)[0]) + 1}", InitError)
+        where = f"{name}, frame {int(row[0])}"
+        if row[1] != int(row[1]) or abs(row[1]) > MAX_ID:
+            raise InitError(f"{where}: the id must be an integer from {-MAX_ID} to {MAX_ID}, got {row[1]:g}")
+        check_box(*row[2:6], f"{where}, id {int(row[1])}", InitError)
     targets = []
     for track_id in np.unique(rows[:, 1]):
         own = rows[rows[:, 1] == track_id]
@@ -205,8 +216,10 @@ def read_init_boxes(path: str | PathLike[str]) -> InitPlan:
         if not all(math.isfinite(v) for v in values):
             raise InitError(f"{name}, line {number}: a field is not finite")
         track_id, x, y, w, h = values
-        if track_id != int(track_id):
-            raise InitError(f"{name}, line {number}: the id must be an integer, got {track_id:g}")
+        if track_id != int(track_id) or abs(track_id) > MAX_ID:
+            raise InitError(f"{name}, line {number}: the id must be an integer from {-MAX_ID} to {MAX_ID}, "
+                            f"got {fields_[0]}")
+        check_box(x, y, w, h, f"{name}, line {number}", InitError)
         if w <= 0 or h <= 0:
             raise InitError(f"{name}, line {number}: the box needs a positive width and height, got {w:g} x {h:g}")
         if int(track_id) in seen:

@@ -4,6 +4,10 @@ A MOTChallenge file has one box per line, ``frame,id,x,y,w,h[,flag,...]``, with 
 frames and the box's top-left corner ``(x, y)`` and size ``(w, h)`` in pixels (1-based:
 the top-left pixel of the image is at (1, 1)).  The tracker works in 0-based pixels and
 converts at these readers and writers.
+
+Every value is checked to lie in a sane range (:data:`MAX_FRAME`, :data:`MAX_ID`,
+:data:`MAX_COORDINATE`): a frame or id that no array of machine integers holds, or a box of
+1e308 pixels, is an error naming the file, the line and the value, not an overflow later.
 """
 
 from __future__ import annotations
@@ -17,7 +21,8 @@ import numpy as np
 from belief.textfiles import read_text
 from belief_tracking.errors import TrackFileError
 
-__all__ = ["MOT_COLUMNS", "read_mot", "write_tracks", "text_lines"]
+__all__ = ["MOT_COLUMNS", "MAX_FRAME", "MAX_ID", "MAX_COORDINATE", "read_mot", "write_tracks", "text_lines",
+           "check_frame", "check_box"]
 
 #: Columns of the array returned by :func:`read_mot`.  ``flag`` is the 7th column of the
 #: file: for ground truth, 0 means "not scored"; for tracker output it is a confidence,
@@ -25,6 +30,42 @@ __all__ = ["MOT_COLUMNS", "read_mot", "write_tracks", "text_lines"]
 MOT_COLUMNS = ("frame", "id", "x", "y", "width", "height", "flag")
 
 _FRAME, _ID, _X, _Y, _W, _H, _FLAG = range(len(MOT_COLUMNS))
+
+#: The largest frame number of a file (frames count from 1): 2^31 - 1.
+MAX_FRAME = 2**31 - 1
+#: The largest magnitude of an id: ids are integers in [-MAX_ID, MAX_ID].
+MAX_ID = 2**31 - 1
+#: The largest magnitude, in pixels, of a box corner coordinate, width or height.  Far beyond
+#: any image, and small enough that sums and products of coordinates never overflow.
+MAX_COORDINATE = 1e6
+
+
+def check_frame(value: float, where: str, error: type[Exception] = TrackFileError, text: str | None = None) -> int:
+    """A frame number of a file as an int: an integer from 1 to :data:`MAX_FRAME`, else ``error`` naming ``where``.
+
+    Examples
+    --------
+    >>> check_frame(3.0, "f.txt, line 1")
+    3
+    >>> check_frame(0.0, "f.txt, line 1")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    belief_tracking.errors.TrackFileError: f.txt, line 1: the frame must be an integer of at least 1, got 0 (...)
+    """
+    if not (math.isfinite(value) and value == int(value) and 1 <= value <= MAX_FRAME):
+        shown = text if text is not None else f"{value:g}"
+        bound = f"at most {MAX_FRAME}" if math.isfinite(value) and value > MAX_FRAME else "frames count from 1"
+        raise error(f"{where}: the frame must be an integer of at least 1, got {shown} ({bound})")
+    return int(value)
+
+
+def check_box(x: float, y: float, w: float, h: float, where: str, error: type[Exception] = TrackFileError) -> None:
+    """Raise ``error`` naming ``where`` if a coordinate or size of a box exceeds :data:`MAX_COORDINATE` pixels."""
+    for label, value in (("x", x), ("y", y), ("width", w), ("height", h)):
+        if not math.isfinite(value) or abs(value) > MAX_COORDINATE:
+            raise error(f"{where}: the box {label} {value:g} is beyond {MAX_COORDINATE:g} pixels")
+
+
 _MIN_FIELDS, _MAX_FIELDS = 6, 10
 
 
@@ -74,8 +115,10 @@ def read_mot(path: str | PathLike[str], *, allow_empty: bool = False) -> np.ndar
     TrackFileError
         The file is missing or unreadable, holds no rows (unless ``allow_empty``), or a line (named with its
         number) has the wrong number of fields, a field that is not a finite number, a
-        frame or id that is not an integer, a negative width or height, or repeats the
-        id of an earlier line of the same frame.
+        frame that is not an integer from 1 to :data:`MAX_FRAME`, an id that is not an
+        integer of magnitude at most :data:`MAX_ID`, a negative width or height, a box
+        coordinate or size beyond :data:`MAX_COORDINATE` pixels, or repeats the id of an
+        earlier line of the same frame.
 
     Examples
     --------
@@ -111,12 +154,14 @@ def read_mot(path: str | PathLike[str], *, allow_empty: bool = False) -> np.ndar
             if not math.isfinite(value):
                 raise TrackFileError(f"{where}: field {column} is not finite: {field!r}")
             values.append(value)
-        frame, track_id, _, _, width, height = values[:6]
-        for label, value in (("frame", frame), ("id", track_id)):
-            if value != int(value):
-                raise TrackFileError(f"{where}: the {label} must be an integer, got {value:g}")
+        frame, track_id, x, y, width, height = values[:6]
+        check_frame(frame, where, text=fields_[0])
+        if track_id != int(track_id) or abs(track_id) > MAX_ID:
+            raise TrackFileError(f"{where}: the id must be an integer from {-MAX_ID} to {MAX_ID}, "
+                                 f"got {fields_[1]}")
         if width < 0 or height < 0:
             raise TrackFileError(f"{where}: negative box size {width:g} x {height:g}")
+        check_box(x, y, width, height, where)
         key = (int(frame), int(track_id))
         if key in first_line_of:
             raise TrackFileError(
