@@ -518,7 +518,8 @@ def check_rule(rule: Union[str, RuleInfo], *, associative: bool | None = None, c
 
     * **mass conservation**: every result's masses sum to one within ``tol``, m(∅)
       included if the rule keeps conflict (``RuleInfo.keeps_conflict``), else m(∅) = 0;
-    * **no negative mass**: no mass below -``tol`` in the raw values of a batch result;
+    * **no negative mass**: no mass below -``tol`` (read from the values of a batch result,
+      which keep what a MassFunction drops);
     * **commutativity**: the order of the sources does not change the result;
     * **associativity**: ``combine(m1, m2, m3)`` equals both pairwise folds
       ``combine(combine(m1, m2), m3)`` and ``combine(m1, combine(m2, m3))``;
@@ -708,13 +709,28 @@ def _batch_sources(draw, model: Model, max_sources: int, max_focal: int, subnorm
     """2 to max_sources sources for the batch law: N-row batches, one-row batches and mass functions (broadcast)."""
     n_rows = draw(_integers(1, 3))
     if bayesian_too and draw(_integers(0, 1)):
-        return tuple(draw(_bayesian_under(model, 2, max_sources, n_rows, n_rows, MAX_WEIGHT)))
+        return _Shown(draw(_bayesian_under(model, 2, max_sources, n_rows, n_rows, MAX_WEIGHT)))
     count = draw(_integers(2, max_sources))
     batch, any_source = _broadcast_sources(model, n_rows, max_focal, subnormal, nondogmatic)
     out = [draw(batch)]                        # one N-row batch at least, so that the result is a batch
     out += [draw(any_source) for _ in range(count - 1)]
     order = draw(_orders(count, False))
-    return tuple(out[k] for k in order)
+    return _Shown(out[k] for k in order)
+
+
+class _Shown(tuple):
+    """Sources that print as the calls that build them: a MassBatch's own repr gives only its shape."""
+
+    def __repr__(self) -> str:
+        return "(" + ", ".join(_source_repr(source) for source in self) + ")"
+
+
+def _source_repr(source) -> str:
+    if not isinstance(source, MassBatch):
+        return repr(source)
+    subnormal = ", subnormal=True" if any(not e.terms for e in source.focal) else ""
+    return (f"MassBatch({[str(e) for e in source.focal]!r}, {source.values.tolist()!r}, "
+            f"model={source.model!r}{subnormal})")
 
 
 @dataclass(frozen=True)
@@ -904,15 +920,18 @@ class _Checker:
     def batch_rows(self, sources: tuple) -> None:
         n_rows = max(len(s) if isinstance(s, MassBatch) else 1 for s in sources)
         fused = self.combine(*sources)
-        closed_form = {}
+        closed_form: dict[str, np.ndarray] = {}
         if not isinstance(fused, _Refusal) and type(fused) is not MassBatch:
-            # A closed-form batch: its measures of the hypotheses come from the closed forms, read them first.
+            # A closed-form batch (belief.bayesian): its measures of the hypotheses come from the closed forms,
+            # for every hypothesis (a table) or one per row (select=), whatever the general combination gives.
             hypotheses = list(fused.frame.singletons)
+            select = np.arange(n_rows) % len(hypotheses)
             for measure in ("bel", "pls", "betp", "mass"):
-                value = _attempt(lambda: getattr(fused, measure)(hypotheses))
-                if not isinstance(value, _Refusal):
-                    closed_form[measure] = value
-            closed_form["empty_mass"] = fused.empty_mass
+                table = _attempt(lambda: getattr(fused, measure)(hypotheses))
+                if not isinstance(table, _Refusal):
+                    closed_form[measure] = table
+                    closed_form[f"{measure} (select=)"] = getattr(fused, measure)(hypotheses, select=select)
+            closed_form["m(∅)"] = fused.empty_mass
         if not isinstance(fused, _Refusal):
             self.valid(fused, _call(len(sources), "b"))
         per_row = []
@@ -936,6 +955,8 @@ class _Checker:
                 wanted = _attempt(lambda: _measure(expected, measure))
                 if isinstance(wanted, _Refusal):
                     continue
+                if measure.endswith("(select=)"):
+                    wanted = wanted[k % len(wanted)]
                 got = np.asarray(values[k], dtype=float)
                 if not np.all(np.abs(got - wanted) <= self.tol):
                     self.fail("batch = row by row", f"row {k} of the closed-form batch has {measure} "
@@ -944,9 +965,11 @@ class _Checker:
 
 
 def _measure(m: MassFunction, measure: str) -> np.ndarray:
-    if measure == "empty_mass":
+    """A measure of a mass function as :meth:`_Checker.batch_rows` names it: of every hypothesis, or m(∅)."""
+    if measure == "m(∅)":
         return np.asarray(m.empty_mass)
-    return np.asarray(getattr(m.batch(), measure)(list(m.frame.singletons))[0], dtype=float)
+    name = measure.split()[0]
+    return np.asarray(getattr(m.batch(), name)(list(m.frame.singletons))[0], dtype=float)
 
 
 def _attempt(compute: Callable):
