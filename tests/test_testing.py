@@ -232,7 +232,7 @@ def broken_rules():
 
 
 @pytest.mark.parametrize(("rule", "law", "message"), [
-    ("broken_forgets_the_conflict", "mass conservation", r"sum to 0\.\d+, not 1"),
+    ("broken_forgets_the_conflict", "mass conservation", r"sum to 0(\.\d+)?, not 1"),
     ("broken_favours_the_first_source", "commutativity", r"combine\(m1, m2(, m3)?\) differs from combine\(m[23]"),
     ("broken_average_claimed_associative", "associativity", r"differs from combine\(combine\(m1, m2\), m3\)"),
     ("broken_extrapolates", "no negative mass", r"gives m\(.+\) = -"),
