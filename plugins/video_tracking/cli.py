@@ -16,13 +16,20 @@ setting of :class:`~belief_tracking.config.TrackerConfig`.
 ``belief eval TRACKS.txt GT.txt`` scores tracks; ``belief experiment GRID.toml`` runs a
 grid of seeded runs.  Every value is checked here or in the settings dataclasses; bad
 input raises a :class:`~belief_tracking.errors.TrackingError`, which the ``belief``
-command line reports in one line with exit status 1.
+command line reports in one line with exit status 1.  ``belief track`` also exits with
+status 1, after writing the outputs of the frames it decoded, when a video decodes fewer
+frames than its container announces; SIGTERM ends it as Ctrl-C does, deleting the files it
+was writing (exit status 143).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import signal
+import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 from belief_tracking.extras import require
@@ -127,14 +134,59 @@ def _detections(args: argparse.Namespace, frame_count: int | None, width: int, h
     return read_detections(args.detections, frame_count=frame_count, image_size=(width, height))
 
 
+#: The exit status of a run ended by SIGTERM (128 + the signal's number, as a shell reports it).
+TERMINATED_STATUS = 128 + 15
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread as an interruption, so that a run deletes its staged files."""
+
+
+@contextlib.contextmanager
+def _sigterm_interrupts() -> Iterator[None]:
+    """Turn SIGTERM into :class:`_Terminated` while the block runs (only in the main thread)."""
+    def handler(signum, frame):
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)   # a second SIGTERM must not cut the clean-up short
+        raise _Terminated()
+
+    try:
+        previous = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread: signals are not ours to handle
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _output_dir(text: str | None, option: str = "--out") -> None:
+    from belief_tracking.errors import TrackingError
+
+    if text is not None and not text.strip():
+        raise TrackingError(f"{option} must name a folder, got an empty path (use {option} . for the working "
+                            "folder)")
+
+
 def _cmd_track(args: argparse.Namespace) -> int:
+    """``belief track``: SIGTERM ends it as Ctrl-C does, with no staged file left behind."""
+    try:
+        with _sigterm_interrupts():
+            return _track(args)
+    except _Terminated:
+        print(f"belief: terminated (SIGTERM); nothing of this run was left in {args.out}", file=sys.stderr)
+        return TERMINATED_STATUS
+
+
+def _track(args: argparse.Namespace) -> int:
     from belief_tracking import scenes
     from belief_tracking.config import TrackerConfig
-    from belief_tracking.errors import TrackingError
+    from belief_tracking.errors import TrackingError, VideoError
     from belief_tracking.initiation import init_from_gt, read_init_boxes
     from belief_tracking.runner import run
     from belief_tracking.sources import open_source
 
+    _output_dir(args.out)
     config = TrackerConfig.from_settings(_settings(args), "belief track")
     progress = not args.no_progress
 
@@ -176,6 +228,11 @@ def _cmd_track(args: argparse.Namespace) -> int:
         print(f"MOTA {s.mota:.4f}  IDF1 {s.idf1:.4f}  ID switches {s.id_switches}  "
               f"centre error mean {s.mean_centre_error:.2f} px, median {s.median_centre_error:.2f} px")
         print(SCORES_EXPLAINED)
+    if not summary.complete:
+        # The outputs of the decoded frames are kept, but the run did not track the whole video.
+        raise VideoError(f"{args.source}: decoded {summary.frames} of the {summary.expected_frames} frames the "
+                         f"file announces (truncated or corrupt after frame {summary.frames}); the outputs of "
+                         f"those {summary.frames} frames are in {args.out}")
     return 0
 
 
@@ -202,7 +259,11 @@ def register(subparsers: Any) -> None:
                     "(MOTChallenge), diagnostics.csv, diagnostics.png, annotated.avi and summary.json into "
                     "--out, and removes those of an earlier run there that this run does not write. With --demo, "
                     "renders a synthetic scene, tracks it automatically and prints its scores against the scene's "
-                    "ground truth.")
+                    "ground truth. Exit status: 0 when the whole source was tracked; 1 on bad input (one line "
+                    "on standard error, no output left), or when a video decodes fewer frames than its container "
+                    "announces (truncated or corrupt: the outputs of the decoded frames are kept, and the line "
+                    "says how many frames of how many); 143 when ended by SIGTERM and 130 by Ctrl-C, with no "
+                    "output of the run left.")
     p.add_argument("source", nargs="?", metavar="SOURCE",
                    help="what to track: a video file; a folder of images (.jpg, .png, .bmp, .tif, ..., taken in "
                         "the order of their names); an image pattern such as img1/%%06d.jpg (from number 0 or 1 "

@@ -41,7 +41,8 @@ class StagedOutputs:
     Parameters
     ----------
     out_dir : path
-        The output directory; created if needed (and removed again by :meth:`abort`, with the
+        The output directory, a non-empty path (``""`` is refused rather than taken as the
+        working directory); created if needed (and removed again by :meth:`abort`, with the
         parents created with it, if it was created here and is left empty).
     owned : sequence of str
         The names that this kind of run writes: on :meth:`commit`, those of them that this run
@@ -64,6 +65,9 @@ class StagedOutputs:
     """
 
     def __init__(self, out_dir: str | PathLike[str], owned: Sequence[str] = ()) -> None:
+        if not isinstance(out_dir, (str, PathLike)) or not os.fspath(out_dir).strip():
+            # Path("") is the working directory: an empty --out would scatter the files there.
+            raise TrackingError(f"the output directory must be a non-empty path, got {out_dir!r}")
         self.out_dir = Path(out_dir)
         if self.out_dir.exists() and not self.out_dir.is_dir():
             raise TrackingError(f"the output {str(out_dir)!r} exists and is not a directory")

@@ -48,6 +48,8 @@ class Summary:
         The output files by name.
     diagnostics : list of dict
         The rows of ``diagnostics.csv`` (frame, id and the diagnostic columns), unrounded.
+    expected_frames : int or None
+        The number of frames the source announces (a video's container), if known.
     """
 
     frames: int
@@ -57,10 +59,17 @@ class Summary:
     scores: object | None
     files: dict
     diagnostics: list = field(default_factory=list, repr=False)
+    expected_frames: int | None = None
+
+    @property
+    def complete(self) -> bool:
+        """Whether every frame the source announces was tracked (False for a truncated or corrupt video)."""
+        return self.expected_frames is None or self.frames >= self.expected_frames
 
     def to_dict(self) -> dict:
         """The JSON-ready part (no arrays)."""
-        return {"frames": self.frames, "tracking_fps": self.tracking_fps, "overall_fps": self.overall_fps,
+        return {"frames": self.frames, "expected_frames": self.expected_frames, "complete": self.complete,
+                "tracking_fps": self.tracking_fps, "overall_fps": self.overall_fps,
                 "scores": None if self.scores is None else self.scores.to_dict(),
                 "files": {k: str(v) for k, v in self.files.items()}}
 
@@ -108,6 +117,11 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
     Returns
     -------
     Summary
+        A video that decodes fewer frames than its container announces (truncated, or a
+        corrupt frame, where decoding stops) is tracked up to its last decoded frame and its
+        outputs are written: ``summary.complete`` is then False, ``summary.expected_frames``
+        gives the announced count, and ``summary.json`` records both (``belief track`` then
+        exits with status 1, naming the decoded and expected frames).
 
     Raises
     ------
@@ -185,7 +199,8 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
                 writer.close()
         if count == 0:
             raise TrackingError(f"{frames.name}: no frame to track")
-        if detections is not None and detections.frames and detections.frames[-1] > count:
+        missing = frames.missing(count)
+        if not missing and detections is not None and detections.frames and detections.frames[-1] > count:
             # A container may announce more frames than it holds, so the check before the run can miss this.
             raise DetectionFileError(f"{detections.source}: frame {detections.frames[-1]} is after the end of "
                                      f"the video ({count} frames)")
@@ -205,6 +220,8 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
         summary = {
             "source": frames.name,
             "frames": count,
+            "expected_frames": frames.count,
+            "complete": not missing,
             "targets": len({int(row[1]) for row in rows}),
             "track_rows": len(rows),
             "fps": {"tracking": tracking_fps, "overall": overall_fps, "decoding_seconds": frames.decode_seconds,
@@ -223,4 +240,5 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
         raise
     finally:
         frames.close()
-    return Summary(count, tracking_fps, overall_fps, tracks, scores, files, records)
+    return Summary(count, tracking_fps, overall_fps, tracks, scores, files, records,
+                   expected_frames=frames.count)

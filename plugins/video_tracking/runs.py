@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from belief_tracking.errors import VideoError
 from belief_tracking.evaluation import evaluate, matched_pairs
 from belief_tracking.experiment import CELL_FORMAT, Cell
 from belief_tracking.initiation import init_from_gt
@@ -51,7 +52,8 @@ def run_cell(cell: Cell) -> dict[str, Any]:
     ------
     TrackingError
         The sequence cannot be read (a video, ground-truth or detection file; the message
-        names it), or a setting is bad.
+        names it), a video decodes fewer frames than it announces (truncated or corrupt), or
+        a setting is bad.
     """
     started = time.perf_counter()
     config = cell.config()
@@ -71,6 +73,9 @@ def run_cell(cell: Cell) -> dict[str, Any]:
             rows += result.mot_rows()
             diagnostics += result.diagnostics.rows(result.frame)
             count += 1
+        if source.missing(count):
+            raise VideoError(f"{source.name}: decoded {count} of the {source.count} frames the file announces "
+                             f"(truncated or corrupt after frame {count})")
     seconds = time.perf_counter() - started
     tracks = np.array(rows, dtype=np.float64).reshape(-1, 10)
     scores = evaluate(gt, tracks)

@@ -137,6 +137,20 @@ class FrameSource:
                         break
         return read()
 
+    def missing(self, decoded: int) -> int:
+        """How many of the frames the source announces were not among the ``decoded`` first ones (0 if unknown).
+
+        A truncated or corrupt video file decodes fewer frames than its container announces
+        (:attr:`count`); a run compares the frames it tracked with it.
+
+        Examples
+        --------
+        >>> source = open_source(np.zeros((4, 6, 8, 3), np.uint8))
+        >>> source.missing(4), source.missing(3)
+        (0, 1)
+        """
+        return max(int(self.count) - int(decoded), 0) if self.count else 0
+
     def close(self) -> None:
         """Release the video file, if any."""
         if self._reader is not None:

@@ -28,7 +28,12 @@ class VideoReader:
     """Frames of a video file, decoded lazily.
 
     The first frame is decoded on opening, so a missing, unreadable or empty file fails
-    at once with a one-line :class:`VideoError`, before any output is written.
+    at once with a one-line :class:`VideoError`, before any output is written.  Iteration
+    stops at the first frame that cannot be decoded (the end of a truncated file, or a
+    corrupt frame: the frames after it cannot be numbered with certainty); :attr:`decoded`
+    then tells how many frames came out, to compare with :attr:`frame_count`.  FFmpeg's own
+    messages about the broken data are kept off standard error
+    (:data:`belief_tracking.extras.FFMPEG_QUIET`).
 
     Parameters
     ----------
@@ -44,6 +49,8 @@ class VideoReader:
         Number of frames the container announces (may be None or approximate).
     decode_seconds : float
         Time spent decoding so far.
+    decoded : int
+        Frames decoded so far.
     """
 
     def __init__(self, path: str | PathLike[str]) -> None:
@@ -58,6 +65,7 @@ class VideoReader:
             raise VideoError(f"cannot read video {self.path!r}: OpenCV cannot open it (not a video, or an "
                              "unsupported codec)")
         self.decode_seconds = 0.0
+        self.decoded = 0
         first = self._read()
         if first is None:
             self.close()
@@ -75,6 +83,7 @@ class VideoReader:
         self.decode_seconds += time.perf_counter() - start
         if not ok or frame is None:
             return None
+        self.decoded += 1
         if frame.ndim == 2:
             frame = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
         return np.ascontiguousarray(frame[:, :, :3], dtype=np.uint8)
