@@ -132,6 +132,29 @@ class InitPlan:
                                 f"(x={x + 1:g}, y={y + 1:g}, w={w:g}, h={h:g}, 1-based) lies outside the "
                                 f"{width}x{height} image")
 
+    def peak(self) -> tuple[int, int]:
+        """The most targets alive at once, and the first 1-based frame where that many are.
+
+        Examples
+        --------
+        >>> plan = InitPlan((TargetInit(1, 1, 3, (0, 0, 2, 2)), TargetInit(2, 2, None, (0, 0, 2, 2)),
+        ...                  TargetInit(3, 4, 5, (0, 0, 2, 2))))
+        >>> plan.peak()
+        (2, 2)
+        """
+        changes: dict[int, int] = {}
+        for target in self.targets:
+            changes[target.first_frame] = changes.get(target.first_frame, 0) + 1
+            if target.last_frame is not None:
+                changes[target.last_frame + 1] = changes.get(target.last_frame + 1, 0) - 1
+        alive = best = 0
+        at = 1
+        for frame in sorted(changes):
+            alive += changes[frame]
+            if alive > best:
+                best, at = alive, frame
+        return best, at
+
     def births(self, frame: int) -> list[TargetInit]:
         """Targets born at 1-based ``frame``."""
         return list(self._births.get(frame, ()))  # type: ignore[attr-defined]

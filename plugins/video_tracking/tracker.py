@@ -204,6 +204,13 @@ class Tracker:
                             "(TrackerConfig.initiation)")
         if not isinstance(rng, np.random.Generator):
             raise TrackingError(f"Tracker needs a numpy.random.Generator, got {type(rng).__name__}")
+        if init is not None:
+            peak, frame = init.peak()
+            if peak > config.max_targets:
+                raise InitError(f"{init.source or 'the init plan'}: {peak} targets at once (at frame {frame}), "
+                                f"more than TrackerConfig.max_targets = {config.max_targets}; a frame costs "
+                                f"particles x targets^3 in the fusion, so this many would take hours: raise the "
+                                f"limit (--set max_targets={peak}) to track them anyway")
         self.config = config
         self.init = init
         self.rng = rng

@@ -259,7 +259,10 @@ class TrackManager:
         estimates = [e for e in estimates if e.id not in gone and (e.id in self._planned
                                                                    or self.lifecycle.unsupported(e.id) <= coast)]
         self._forget(frame)
-        for box in outcome.births:
+        # No automatic track starts while max_targets are live: the cost of a frame grows as
+        # the cube of the number of targets (TrackerConfig.max_targets).
+        room = max(self.config.max_targets - len(self.targets), 0)
+        for box in outcome.births[:room]:
             born = TargetInit(self._next_id, frame, None, tuple(float(v) for v in box))
             estimate = self.add(born, frame, image, foreground, planned=False)
             estimates.append(self._reidentify(estimate, frame))
