@@ -620,7 +620,7 @@ def _move_empty(result: MassBatch, to: Element | None, model: Model, rule: str) 
 #: A single combination of at most this many tuples is summed by a Python loop (numpy's calls cost more).
 SINGLE_LOOP_TUPLES = 96
 #: The same for the conflicting tuples of PCR5 and PCR6.
-PCR_LOOP_TUPLES = 512
+PCR_LOOP_TUPLES = 128
 #: How many single-row tables (:func:`_single_table`) are kept for focal elements that come back.
 SINGLE_CACHE_SIZE = 1024
 
@@ -686,6 +686,10 @@ def _single(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> M
         a, b = sources
         return _pair_loop(source_model, kind, masks[0], a._floats or a._union_floats(), masks[1],
                           b._floats or b._union_floats())
+    if count <= PCR_LOOP_TUPLES and kind in ("pcr5", "pcr6"):
+        if any(0 in mk for mk in masks):
+            return None                         # mass on ∅: the general path refuses it
+        return _pcr_joint_loop(source_model, kind, masks, [m._floats or m._union_floats() for m in sources])
     # The other evaluations follow the canonical order, as the plan does.
     masks = [m._union_masks() for m in sources]
     # Few tuples go through a Python loop on the floats, more through numpy on the arrays.
@@ -729,6 +733,16 @@ def _single(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> M
                 focal, row = focal[1:], kept / scale
         elif kind == "yager":
             focal, row = _single_to_total(source_model, n, focal, np.asarray(row))
+    if type(row) is np.ndarray and kind in ("meet", "dempster", "join"):
+        # Every mass of a mass function is positive: if the product of the smallest ones is,
+        # so is every product and every sum of them (rounding is monotone), and there is no
+        # zero to drop.
+        least = 1.0
+        for m in sources:
+            least *= min(m._union_floats())
+        if least > 0:
+            return MassFunction._from_masks(source_model, focal if type(focal) is tuple else tuple(focal),
+                                            row if row.base is None else row.copy())
     return _single_result(source_model, focal, row)
 
 
@@ -779,6 +793,79 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
     return MassFunction._from_masks(model, tuple(focal), tuple(sums), True)
 
 
+def _pcr_joint_loop(model: Model, rule: str, masks: list, values: list) -> MassFunction:
+    """PCR5 / PCR6 of a few tuples of unions of hypotheses, in one Python loop over the tuples.
+
+    A tuple whose focal elements meet gives its product to the intersection (the
+    consensus); a conflicting one shares it among its elements, by the masses (PCR6) or
+    by the product of the masses of each distinct element (PCR5).  What reaches one
+    element is added by ``math.fsum``, so the result does not depend on the order of the
+    focal elements and agrees with the plan's (consensus folded pairwise, then the
+    shares) within a few units in the last place.
+    """
+    groups: dict = {}
+    get = groups.get
+    pcr5 = rule == "pcr5"
+
+    def put(c, v):
+        group = get(c)
+        if group is None:
+            groups[c] = v
+        elif type(group) is float:
+            groups[c] = [group, v]
+        else:
+            group.append(v)
+
+    if len(masks) == 2:
+        tuples = ((a, b, p, q) for a, p in zip(masks[0], values[0]) for b, q in zip(masks[1], values[1]))
+        for a, b, p, q in tuples:
+            product = p * q
+            if a & b:
+                put(a & b, product)
+            else:                               # two distinct elements: PCR5 and PCR6 coincide
+                factor = product / (p + q)
+                put(a, factor * p)
+                put(b, factor * q)
+    else:
+        for columns in _tuples([len(mk) for mk in masks]):
+            elements = [mk[k] for mk, k in zip(masks, columns)]
+            masses = [v[k] for v, k in zip(values, columns)]
+            meet = -1
+            for x in elements:
+                meet &= x
+            product = masses[0]
+            for m in masses[1:]:
+                product *= m
+            if meet:
+                put(meet, product)
+                continue
+            if pcr5:
+                weights: dict = {}
+                for x, m in zip(elements, masses):
+                    weights[x] = weights[x] * m if x in weights else m
+                total = 0.0
+                for w in weights.values():
+                    total += w
+                factor = product / total
+                for x, w in weights.items():
+                    put(x, factor * w)
+            else:
+                total = 0.0
+                for m in masses:
+                    total += m
+                factor = product / total
+                for x, m in zip(elements, masses):
+                    put(x, factor * m)
+    focal = []
+    sums = []
+    for c, group in groups.items():
+        x = group if type(group) is float else (group[0] + group[1] if len(group) == 2 else fsum(group))
+        if x > 0:
+            focal.append(c)
+            sums.append(x)
+    return MassFunction._from_masks(model, tuple(focal), tuple(sums), True)
+
+
 def _single_result(model: Model, focal: list[int], row: list | np.ndarray) -> MassFunction:
     """The mass function of a result row, without its zero masses (as ``MassBatch.__getitem__``)."""
     if type(row) is list:
@@ -787,7 +874,8 @@ def _single_result(model: Model, focal: list[int], row: list | np.ndarray) -> Ma
         pairs = [(f, x) for f, x in zip(focal, row) if x > 0]
         return MassFunction._from_masks(model, tuple([f for f, _ in pairs]), tuple([x for _, x in pairs]))
     if row.min() > 0:
-        return MassFunction._from_masks(model, tuple(focal), row if row.base is None else row.copy())
+        return MassFunction._from_masks(model, focal if type(focal) is tuple else tuple(focal),
+                                        row if row.base is None else row.copy())
     kept = np.flatnonzero(row > 0)
     return MassFunction._from_masks(model, tuple([focal[i] for i in kept.tolist()]), row[kept])
 
@@ -795,7 +883,7 @@ def _single_result(model: Model, focal: list[int], row: list | np.ndarray) -> Ma
 def _single_to_total(model: Model, n: int, focal: list[int], row: np.ndarray) -> tuple[list[int], np.ndarray]:
     """Yager: the ∅ mass (first) added to total ignorance, as :func:`_move_empty` does."""
     total = sum(model.total.terms)
-    new_focal = focal[1:]
+    new_focal = list(focal[1:])
     new_values = row[1:].copy()
     if total in new_focal:
         new_values[new_focal.index(total)] += row[0]
@@ -871,7 +959,7 @@ def _single_targets(n: int, masks: list, values: list, key: str) -> tuple[list[i
     return focal, np.add.reduceat(_outer(values)[order], starts)
 
 
-def _single_table(n: int, masks: list, key: str) -> tuple[np.ndarray, np.ndarray, list[int]] | None:
+def _single_table(n: int, masks: list, key: str) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]] | None:
     """The order that sorts the tuples by target (stable), where each target's run starts, and the targets."""
     if len(masks) == 2 and key in ("meet", "join"):
         ufunc = np.bitwise_and if key == "meet" else np.bitwise_or
@@ -895,7 +983,7 @@ def _single_table(n: int, masks: list, key: str) -> tuple[np.ndarray, np.ndarray
     step[0] = True
     np.not_equal(sorted_ranks[1:], sorted_ranks[:-1], out=step[1:])
     starts = step.nonzero()[0]
-    return order, starts, union_ranks(n)[1][sorted_ranks[starts]].tolist()
+    return order, starts, tuple(union_ranks(n)[1][sorted_ranks[starts]].tolist())
 
 
 @lru_cache(maxsize=None)
