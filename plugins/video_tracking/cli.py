@@ -363,20 +363,23 @@ def register_eval(subparsers: Any) -> None:
 # -- belief experiment -----------------------------------------------------------------------------
 def _cmd_experiment(args: argparse.Namespace) -> int:
     from belief_tracking.experiment import load_experiment
-    from belief_tracking.grid import run_experiment
+    from belief_tracking.grid import check_output, run_experiment
     from belief_tracking.tables import format_summary
 
+    _output_dir(args.out)
     experiment = load_experiment(args.config, data_dir=args.data)
-    out = Path(args.out) if args.out is not None else Path(args.config).with_suffix("")
+    out = check_output(args.out if args.out is not None else Path(args.config).with_suffix(""))
     cells = experiment.cells()
-    print(f"{experiment.name}: {len(experiment.sequences)} sequences x {len(experiment.methods)} methods x "
-          f"{len(experiment.seeds)} seeds = {len(cells)} runs; outputs in {out}", flush=True)
+    line = (f"{experiment.name}: {len(experiment.sequences)} sequences x {len(experiment.methods)} methods x "
+            f"{len(experiment.seeds)} seeds = {len(cells)} runs; outputs in {out}")
     if args.dry_run:
+        print(line)
         for cell in cells:
             print(f"  {cell.label}")
         return 0
+    # Printed once every argument is checked and the workers are ready: an error is then the only line.
     result = run_experiment(experiment, out, workers=args.workers, scheduler=args.scheduler, fresh=args.fresh,
-                            progress=not args.no_progress)
+                            progress=not args.no_progress, announce=lambda: print(line, flush=True))
     print(f"ran {result.computed} runs, reused {result.reused} finished ones")
     print(format_summary(result.summary))
     return 0
@@ -406,9 +409,11 @@ def register_experiment(subparsers: Any) -> None:
                                                   "folder)")
     p.add_argument("--workers", type=_integer(1), metavar="N", help="local processes, or local Dask workers "
                                                              "(default: one per core)")
-    p.add_argument("--scheduler", metavar="ADDRESS", help="run on the Dask scheduler at ADDRESS "
-                                                           "(tcp://host:8786), or 'local' for a Dask cluster on "
-                                                           "this machine (needs belief[dask])")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run on the Dask scheduler at ADDRESS (tcp://host:8786), or 'local' for a Dask cluster on "
+                        "this machine (needs belief[dask]). The scheduler runs the runs as pickled Python tasks "
+                        "and sends back pickled results: a scheduler that is not yours can run its own code "
+                        "here, so connect only to one you trust")
     p.add_argument("--fresh", action="store_true", help="run every cell again, even the finished ones")
     p.add_argument("--dry-run", action="store_true", help="list the runs and stop")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -5,6 +5,11 @@ the error message of a failed call instead of raising it, so that one failure do
 lose the others.  Local processes are spawned (no copy of this process's OpenCV threads or
 open files); a Dask scheduler is reached through the client's
 :class:`concurrent.futures.Executor`, the same code path.
+
+A Dask scheduler is sent the function and its items as pickled Python, and its workers run
+them; their results come back pickled.  Unpickling runs code, so a scheduler (or worker)
+that is not yours can run anything on this machine, and its workers see the data: connect
+only to a scheduler you trust, on a network you trust.
 """
 
 from __future__ import annotations
@@ -17,13 +22,19 @@ from typing import Any, TypeVar
 
 from belief_tracking.errors import TrackingError
 
-__all__ = ["outcomes", "executor"]
+__all__ = ["outcomes", "executor", "runs_here"]
 
 Item = TypeVar("Item")
 
 
+def runs_here(workers: int | None, scheduler: str | None, tasks: int) -> bool:
+    """Whether :func:`outcomes` runs ``tasks`` items in this process, one after the other (no pool)."""
+    return scheduler is None and min(workers or os.cpu_count() or 1, tasks) == 1
+
+
 def outcomes(function: Callable[[Item], Any], items: Sequence[Item], *, workers: int | None = None,
-             scheduler: str | None = None) -> Iterator[tuple[Item, Any, str | None]]:
+             scheduler: str | None = None,
+             pool: concurrent.futures.Executor | None = None) -> Iterator[tuple[Item, Any, str | None]]:
     """Call ``function`` on every item; yield ``(item, result, None)`` or ``(item, None, error)`` as each ends.
 
     Parameters
@@ -36,7 +47,12 @@ def outcomes(function: Callable[[Item], Any], items: Sequence[Item], *, workers:
         With ``scheduler="local"``, the number of workers of the local Dask cluster.
     scheduler : str, optional
         A Dask scheduler's address (``tcp://host:8786``), or ``"local"`` to start a Dask
-        cluster on this machine (needs the ``dask`` extra).
+        cluster on this machine (needs the ``dask`` extra).  A Dask scheduler runs the tasks
+        it is sent as pickled Python: whoever controls the scheduler (and its workers) runs
+        their own code in this process's name, and the results they send back are unpickled
+        here, so connect to trusted schedulers only.
+    pool : Executor, optional
+        An executor already open (:func:`executor`), used instead of opening one here.
 
     Raises
     ------
@@ -48,14 +64,16 @@ def outcomes(function: Callable[[Item], Any], items: Sequence[Item], *, workers:
     >>> sorted((item, result) for item, result, _ in outcomes(abs, [-2, 3], workers=1))
     [(-2, 2), (3, 3)]
     """
-    if scheduler is None and min(workers or os.cpu_count() or 1, len(items)) == 1:
+    if pool is None and runs_here(workers, scheduler, len(items)):
         for item in items:
             try:
                 yield item, function(item), None
             except Exception as exc:  # noqa: BLE001 - reported with the item it came from
                 yield item, None, f"{type(exc).__name__}: {exc}"
         return
-    with executor(workers, scheduler, len(items)) as pool:
+    with contextlib.ExitStack() as stack:
+        if pool is None:
+            pool = stack.enter_context(executor(workers, scheduler, len(items)))
         futures = {pool.submit(function, item): item for item in items}
         try:
             for future in concurrent.futures.as_completed(futures):
@@ -91,9 +109,44 @@ def executor(workers: int | None, scheduler: str | None, tasks: int) -> Iterator
                                                        threads_per_worker=1, dashboard_address=None))
             client = stack.enter_context(Client(cluster))
         else:
+            _probe(scheduler)
             try:
                 client = stack.enter_context(Client(scheduler, timeout=30))
             except (OSError, TimeoutError, ValueError) as exc:
                 raise TrackingError(f"cannot reach the Dask scheduler at {scheduler!r} ({exc})") from None
+            except Exception as exc:  # noqa: BLE001 - something answers there, but not as a Dask scheduler
+                detail = (str(exc).splitlines() or [""])[0][:200]
+                raise TrackingError(f"cannot reach the Dask scheduler at {scheduler!r}: what answers there is "
+                                    f"not a Dask scheduler ({type(exc).__name__}: {detail})") from None
         # pure=False: two tasks are never merged into one, whatever their arguments
         yield client.get_executor(pure=False)
+
+
+#: Seconds to wait for a TCP connection to a Dask scheduler before the client's own handshake.
+PROBE_SECONDS = 5.0
+
+
+def _probe(address: str) -> None:
+    """Fail at once, in one line, when nothing listens at a ``tcp://host:port`` scheduler address.
+
+    Dask's client retries a refused connection until its timeout (30 s); a plain TCP
+    connection tells a wrong address or port in a moment.  Other schemes are left to Dask.
+    """
+    import socket
+    from urllib.parse import urlsplit
+
+    parts = urlsplit(address)
+    if parts.scheme != "tcp":
+        return
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        raise TrackingError(f"cannot reach the Dask scheduler at {address!r}: not a host:port address") from None
+    if not host or port is None:
+        return
+    try:
+        with socket.create_connection((host, port), timeout=PROBE_SECONDS):
+            pass
+    except OSError as exc:
+        reason = exc.strerror or str(exc) or type(exc).__name__
+        raise TrackingError(f"cannot reach the Dask scheduler at {address!r} ({reason})") from None

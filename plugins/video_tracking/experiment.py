@@ -98,6 +98,7 @@ __all__ = [
     "Experiment",
     "CELL_FORMAT",
     "AUTOMATIC_WARM_UP",
+    "MAX_RUNS",
     "load_experiment",
     "experiment_from_mapping",
 ]
@@ -114,6 +115,11 @@ _GRID_KEYS = ("rules", "fusions", "cues")
 _INITS = ("gt", "automatic")
 #: Frames the background model learns from before an automatic run (as ``belief track``).
 AUTOMATIC_WARM_UP = 50
+
+#: The most runs (sequences x methods x seeds) an experiment may have.  Each run tracks a whole
+#: sequence, so a larger grid would take years; a count of seeds is refused before any list of
+#: that length is made.  Split a larger study into several experiments.
+MAX_RUNS = 100_000
 
 
 class ExperimentError(TrackingError):
@@ -369,6 +375,11 @@ class Experiment:
                 raise ExperimentError(f"{what} must have distinct names; repeated: {', '.join(repeated)}")
         if not self.seeds:
             raise ExperimentError("the experiment has no seeds")
+        runs = len(self.sequences) * len(self.methods) * len(self.seeds)
+        if runs > MAX_RUNS:
+            raise ExperimentError(f"{len(self.sequences)} sequences x {len(self.methods)} methods x "
+                                  f"{len(self.seeds)} seeds = {runs} runs, more than an experiment may have "
+                                  f"(MAX_RUNS = {MAX_RUNS}); split it into several experiments")
         for seed in self.seeds:
             _check_count(seed, "a seed", minimum=0)
         if len(set(self.seeds)) != len(self.seeds):
@@ -404,8 +415,9 @@ def load_experiment(path: str | os.PathLike[str], data_dir: str | os.PathLike[st
     Raises
     ------
     ExperimentError
-        A missing or malformed file, an unknown key, scene, rule, cue or setting, or a
-        missing video, ground truth or detection file; the message names the problem.
+        A missing, binary or malformed file, an unknown key, scene, rule, cue or setting, a
+        missing video, ground truth or detection file, or more than :data:`MAX_RUNS` runs;
+        the message names the problem.
     """
     try:
         import tomllib
@@ -420,6 +432,8 @@ def load_experiment(path: str | os.PathLike[str], data_dir: str | os.PathLike[st
         raise ExperimentError(f"{path}: no such experiment file") from None
     except OSError as exc:
         raise ExperimentError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise ExperimentError(f"{path}: not a TOML file (it is not UTF-8 text)") from None
     except tomllib.TOMLDecodeError as exc:
         raise ExperimentError(f"{path}: not valid TOML ({exc})") from None
     mapping.setdefault("name", path.stem)
@@ -456,6 +470,9 @@ def experiment_from_mapping(mapping: Mapping[str, Any], base_dir: str | os.PathL
     seeds = mapping.get("seeds", [0])
     if isinstance(seeds, int) and not isinstance(seeds, bool):
         _check_count(seeds, "seeds (a count)", minimum=1)
+        if seeds > MAX_RUNS:
+            raise ExperimentError(f"seeds = {seeds} is more runs than an experiment may have "
+                                  f"(MAX_RUNS = {MAX_RUNS})")
         seeds = list(range(seeds))
     if not isinstance(seeds, list):
         raise ExperimentError(f"seeds must be a list of seeds or a count, got {seeds!r}")

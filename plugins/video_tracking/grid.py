@@ -10,9 +10,11 @@ alone), and writes the tables of :mod:`~belief_tracking.tables`.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -20,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from belief_tracking.errors import TrackingError
-from belief_tracking.executors import outcomes
+from belief_tracking.executors import executor, outcomes, runs_here
 from belief_tracking.experiment import CELL_FORMAT, Experiment, ExperimentError
 from belief_tracking.extras import require
 from belief_tracking.runs import run_cell
@@ -34,7 +36,7 @@ from belief_tracking.tables import (
     write_text,
 )
 
-__all__ = ["ExperimentResult", "run_experiment"]
+__all__ = ["ExperimentResult", "run_experiment", "check_output"]
 
 
 @dataclass(frozen=True)
@@ -66,8 +68,27 @@ class ExperimentResult:
     files: dict[str, Path]
 
 
+def check_output(out_dir: str | os.PathLike[str]) -> Path:
+    """The output folder of an experiment as a Path; an empty path or an existing file is refused.
+
+    Examples
+    --------
+    >>> check_output("")
+    Traceback (most recent call last):
+    ...
+    belief_tracking.experiment.ExperimentError: the output folder must be a non-empty path, got ''
+    """
+    if not isinstance(out_dir, (str, os.PathLike)) or not os.fspath(out_dir).strip():
+        raise ExperimentError(f"the output folder must be a non-empty path, got {out_dir!r}")
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ExperimentError(f"{out} exists and is not a folder")
+    return out
+
+
 def run_experiment(experiment: Experiment, out_dir: str | os.PathLike[str], *, workers: int | None = None,
-                   scheduler: str | None = None, fresh: bool = False, progress: bool = True) -> ExperimentResult:
+                   scheduler: str | None = None, fresh: bool = False, progress: bool = True,
+                   announce: Callable[[], None] | None = None) -> ExperimentResult:
     """Run every cell that is not finished yet, then write the tables.
 
     Parameters
@@ -83,11 +104,18 @@ def run_experiment(experiment: Experiment, out_dir: str | os.PathLike[str], *, w
         The address of a Dask scheduler (``tcp://host:8786``), or ``"local"`` to start a
         Dask cluster on this machine; needs the ``dask`` extra
         (``pip install "belief[dask]"``).  Recorded videos must be readable at the same path
-        on every worker.
+        on every worker.  The scheduler runs the cells as pickled Python tasks and sends
+        back pickled results: connect only to a scheduler you trust (one that is not yours
+        can run its own code here).
     fresh : bool
         Run every cell again, even those already finished.
     progress : bool
         Show a progress bar (when standard error is a terminal).
+    announce : callable, optional
+        Called with no argument once every argument is checked and the workers are ready
+        (the Dask scheduler reached), before anything is written: ``belief experiment``
+        prints its "N runs; outputs in OUT" line there, so that a bad argument is the only
+        line printed.
 
     Returns
     -------
@@ -106,12 +134,8 @@ def run_experiment(experiment: Experiment, out_dir: str | os.PathLike[str], *, w
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, (int, np.integer))
                                 or workers < 1):
         raise ExperimentError(f"workers must be an integer >= 1, got {workers!r}")
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise ExperimentError(f"{out} exists and is not a folder")
+    out = check_output(out_dir)
     cell_dir = out / "cells"
-    cell_dir.mkdir(parents=True, exist_ok=True)
-    write_text(out / "experiment.json", json.dumps(experiment.to_dict(), indent=2, sort_keys=True) + "\n")
 
     cells = experiment.cells()
     records: dict[str, dict[str, Any]] = {}
@@ -124,24 +148,41 @@ def run_experiment(experiment: Experiment, out_dir: str | os.PathLike[str], *, w
             records[cell.key] = record
     reused = len(records)
     failures = []
-    if todo:
-        bar = tqdm(total=len(todo), unit="run", desc=experiment.name, file=sys.stderr, leave=False,
-                   disable=not progress or not sys.stderr.isatty())
+    with contextlib.ExitStack() as stack:
+        # The workers first (an unreachable scheduler fails here), then the announcement and the files.
+        pool = None
+        if todo and not runs_here(workers, scheduler, len(todo)):
+            try:
+                pool = stack.enter_context(executor(workers, scheduler, len(todo)))
+            except TrackingError as exc:
+                raise exc if isinstance(exc, ExperimentError) else ExperimentError(str(exc)) from None
+        if announce is not None:
+            announce()
         try:
-            for cell, record, error in outcomes(run_cell, todo, workers=workers, scheduler=scheduler):
-                bar.update(1)
-                if error is not None:
-                    failures.append((cell, error))
-                    continue
-                text = json.dumps(record, allow_nan=False, default=_json_default)
-                write_text(cell_dir / f"{cell.key}.json", text + "\n")
-                records[cell.key] = json.loads(text)    # as a reused cell reads: lists, not tuples
-        except TrackingError as exc:
-            if isinstance(exc, ExperimentError):
-                raise
-            raise ExperimentError(str(exc)) from None
-        finally:
-            bar.close()
+            cell_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ExperimentError(f"cannot create the output folder {str(cell_dir)!r}: "
+                                  f"{exc.strerror or exc}") from None
+        write_text(out / "experiment.json", json.dumps(experiment.to_dict(), indent=2, sort_keys=True) + "\n")
+        if todo:
+            bar = tqdm(total=len(todo), unit="run", desc=experiment.name, file=sys.stderr, leave=False,
+                       disable=not progress or not sys.stderr.isatty())
+            try:
+                for cell, record, error in outcomes(run_cell, todo, workers=workers, scheduler=scheduler,
+                                                    pool=pool):
+                    bar.update(1)
+                    if error is not None:
+                        failures.append((cell, error))
+                        continue
+                    text = json.dumps(record, allow_nan=False, default=_json_default)
+                    write_text(cell_dir / f"{cell.key}.json", text + "\n")
+                    records[cell.key] = json.loads(text)    # as a reused cell reads: lists, not tuples
+            except TrackingError as exc:
+                if isinstance(exc, ExperimentError):
+                    raise
+                raise ExperimentError(str(exc)) from None
+            finally:
+                bar.close()
 
     finished = [cell for cell in cells if cell.key in records]
     results = [records[cell.key]["row"] for cell in finished]
