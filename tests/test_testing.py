@@ -41,7 +41,7 @@ from belief import (
     combine,
 )
 from belief.extra_rules import average
-from belief.rules import RuleInfo, conjunctive, register_rule
+from belief.rules import RuleInfo, conjunctive, get_rule, register_rule
 from belief.testing import (
     KINDS,
     LAWS,
@@ -223,12 +223,25 @@ BROKEN = {
 
 @pytest.fixture(scope="module")
 def broken_rules():
-    # belief.rules has no unregister_rule, so these stay registered for the rest of the session; their names
-    # are unique to this module, and registering a name again replaces its entry.
+    """The broken rules, registered as users register theirs, and taken out of RULES afterwards.
+
+    Other tests list RULES (docs/rules.md prints it), so the broken rules must not stay.  belief.rules has no
+    unregister_rule: removing the entry of RULES takes a rule out of every listing, and only get_rule(name)
+    would still find its name (and then fail).
+    """
     for name, (function, associative, keeps_conflict) in BROKEN.items():
         register_rule(name, summary=f"a deliberately broken rule: {name.replace('_', ' ')}", associative=associative,
                       keeps_conflict=keeps_conflict)(function)
-    return list(BROKEN)
+    yield list(BROKEN)
+    for name in BROKEN:
+        RULES.pop(name, None)
+
+
+def test_the_broken_rules_are_registered_like_any_other(broken_rules):
+    for name in broken_rules:
+        assert get_rule(name.upper()) is RULES[name] and RULES[name].function is BROKEN[name][0]
+    m = MassFunction({"a": 0.5, "b": 0.5}, model=Model.shafer(Frame(["a", "b"])))
+    assert combine(m, m, rule="broken_average_claimed_associative") == m
 
 
 @pytest.mark.parametrize(("rule", "law", "message"), [
