@@ -497,7 +497,8 @@ class RuleReport:
 
     def __str__(self) -> str:
         width = max(len(law) for law in self.laws)
-        lines = [f"rule {self.rule!r}: {len(self.laws)} laws hold"]
+        count = len(self.laws)
+        lines = [f"rule {self.rule!r}: {count} law{'s hold' if count != 1 else ' holds'}"]
         for law in self.laws:
             lines.append(f"  {law:<{width}}  {self.examples.get(law, 0)} inputs, "
                          f"{self.refused.get(law, 0)} refused")

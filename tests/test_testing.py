@@ -307,7 +307,7 @@ def test_rule_reports_compare_by_rule_and_laws():
     report = RuleReport("x", ("mass conservation",), {"mass conservation": 3}, {"mass conservation": 1})
     assert report == RuleReport("x", ("mass conservation",))
     assert repr(report) == "RuleReport(rule='x', laws=('mass conservation',))"
-    assert str(report) == "rule 'x': 1 laws hold\n  mass conservation  3 inputs, 1 refused"
+    assert str(report) == "rule 'x': 1 law holds\n  mass conservation  3 inputs, 1 refused"
 
 
 # -- the strategies --------------------------------------------------------------------------------------------
@@ -344,6 +344,15 @@ def test_elements_are_not_empty_under_their_model(data):
     element = data.draw(elements(model, max_terms=2))
     assert element.terms and not model.is_empty(element) and model.reduce(element) == element
     assert len(element.terms) <= 2
+
+
+@settings(max_examples=30)
+@given(data=st.data())
+def test_elements_of_large_frames_are_drawn_without_listing_the_conjunctions(data):
+    model = data.draw(st.sampled_from([Model.shafer(Frame.numbered(14)), Model.hybrid(Frame.numbered(13), ["t1"]),
+                                       Model.free(Frame.numbered(13))]))
+    element = data.draw(elements(model))
+    assert element.terms and not model.is_empty(element) and model.reduce(element) == element
 
 
 @settings(max_examples=80)
