@@ -7,10 +7,11 @@ Which laws hold for which rule (each claim checked below, and each law not claim
   Dezert & Smarandache, Advances and Applications of DSmT, vol. 1, 2004);
 * disjunctive: commutative, associative; the vacuous mass function absorbs instead (Dubois & Prade 1986);
 * Yager: commutative, the vacuous mass function neutral (the conflict goes to Θ either way), not associative;
-* Dubois–Prade and DSmH: commutative only: with a vacuous third source a conflicting product goes to
-  X ∪ Y ∪ Θ = Θ instead of X ∪ Y;
-* PCR5 and PCR6: commutative only; the vacuous mass function is neutral for two sources but not for
-  more (Dezert, Dezert & Smarandache, JAIF 16(1), 2021, Example 4);
+* Dubois–Prade and DSmH: commutative only; combine(m, vacuous) = m, but with two sources and the vacuous one
+  a conflicting product goes to X ∪ Y ∪ Θ = Θ instead of X ∪ Y;
+* PCR5 and PCR6: commutative only; combine(m, vacuous) = m, but combine(m1, m2, vacuous) differs from
+  combine(m1, m2): the vacuous source takes its share of the conflict (Dezert, Dezert & Smarandache,
+  JAIF 16(1), 2021, Example 4);
 * PCR5+ and PCR6+: commutative, the vacuous mass function neutral (JAIF 2021), not associative;
 * the R-weighted rule: folded in source order, so commutative for two sources only; the vacuous mass
   function is neutral (it conflicts with nothing);
@@ -26,8 +27,8 @@ import sys
 import numpy as np
 import pytest
 from hypothesis import Phase, given, settings
-from hypothesis.errors import NoSuchExample
 from hypothesis import strategies as st
+from hypothesis.errors import NoSuchExample
 
 from belief import (
     RULES,
@@ -41,6 +42,7 @@ from belief import (
     combine,
 )
 from belief.extra_rules import average
+from belief.representations import conjunctive_weights
 from belief.rules import RuleInfo, conjunctive, get_rule, register_rule
 from belief.testing import (
     KINDS,
@@ -155,7 +157,8 @@ def test_cautious_treats_the_vacuous_mass_function_as_neutral_for_separable_sour
     # and not for this one, whose weight of ∅ is 4/3 (the shrunk counterexample of check_rule)
     third = 1 / 3
     general = MassFunction({"a": third, "b": third, "a|b|c": third}, model=shafer)
-    fused = combine(general, vacuous, rule="cautious")
+    assert conjunctive_weights(general)[0] == pytest.approx(4 / 3)        # w(∅), subsets in binary order
+    fused = combine(general, vacuous, rule="cautious")                     # min(w, 1) changes w(∅) to 1
     assert fused.empty_mass == pytest.approx(0.25)
 
 
