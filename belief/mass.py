@@ -91,33 +91,39 @@ class MassFunction(_MassSlots):
             # than making the elements or the array.  Anything else (intersections, element
             # keys, "empty", a name twice, a bad mass) goes to the general constructors below.
             get, bit, _ = context
-            masks = []
-            values = []
             try:
-                for key, value in masses.items():
-                    mask = sum(map(get, key.split("|")))
-                    if mask.bit_count() != key.count("|") + 1 or type(value) is not float:
-                        break                                    # a name twice, or a mass to check
-                    masks.append(mask)
-                    values.append(value)
+                masks = [sum(map(get, key.split("|"))) for key in masses]
             except (KeyError, AttributeError):
-                pass
-            if masks and len(masks) == len(masses):
-                # NaN and ±inf make the sum NaN or infinite; a negative mass fails min().
-                if len(set(masks)) == len(masks) and min(values) >= 0.0 \
-                        and abs(math.fsum(values) - 1.0) <= SUM_TOLERANCE:
+                masks = None
+            if masks:
+                values = list(masses.values())
+                # Masks add up without carries (a union names each hypothesis once) iff their bits
+                # count the names; NaN and ±inf make the sum NaN or infinite; min() finds a negative.
+                if set(map(type, values)) == _FLOAT and len(set(masks)) == len(masks) \
+                        and sum(map(int.bit_count, masks)) == "|".join(masses).count("|") + 1 \
+                        and min(values) >= 0.0 and abs(math.fsum(values) - 1.0) <= SUM_TOLERANCE:
                     if 0.0 in values:
                         masks = [m for m, v in zip(masks, values) if v > 0.0]
                         values = [v for v in values if v > 0.0]
-                    self._set_unions(model, tuple(masks), tuple(values))
+                    if type(self) is MassFunction:
+                        # Plain stores on the twin class (see _from_masks), then back to MassFunction.
+                        _set(self, "__class__", _FreshMass)
+                        self.model = model
+                        self._focal = self._values = self._batch = self._hash = None
+                        self._masks = masks
+                        self._floats = values
+                        self._loose = True
+                        self.__class__ = MassFunction
+                    else:
+                        self._set_unions(model, masks, values)
                     return
-            elif _spaced_unions(self, masses, model, bit):
+            if _spaced_unions(self, masses, model, bit):
                 return
         if not self._plain_init(masses, model):
             self._checked_init(masses, model, subnormal)
 
-    def _set_unions(self, model: Model, masks: tuple[int, ...], values: tuple[float, ...]) -> None:
-        """Hold unions of hypotheses in the order given (sorted when first read)."""
+    def _set_unions(self, model: Model, masks: list[int], values: list[float]) -> None:
+        """Hold unions of hypotheses in the order given (sorted, as tuples, when first read)."""
         if type(self) is MassFunction:
             # Plain stores on the twin class (see _from_masks), then back to MassFunction.
             _set(self, "__class__", _FreshMass)
@@ -248,8 +254,8 @@ class MassFunction(_MassSlots):
         """Wrap unions of hypotheses (bit masks, 0 for ∅) and their masses, without copying.
 
         ``values`` is a tuple of floats, or a fresh array that nothing else holds.  Without
-        ``loose`` the masks are in canonical order; with it (tuples only) they are sorted when
-        first read.
+        ``loose`` the masks are in canonical order; with it they (lists or tuples, floats
+        only) are sorted when first read.
         """
         # A twin class without MassFunction.__setattr__ takes plain stores (cheaper than
         # object.__setattr__), then the object becomes a MassFunction: both share one layout.
@@ -258,7 +264,7 @@ class MassFunction(_MassSlots):
         obj._focal = obj._batch = obj._hash = None
         obj._masks = masks
         obj._loose = loose
-        if type(values) is tuple:
+        if type(values) is not np.ndarray:
             obj._values = None
             obj._floats = values
         else:
@@ -595,6 +601,7 @@ class MassFunction(_MassSlots):
 
 
 _NUMBERS = (int, float, np.integer, np.floating)
+_FLOAT = {float}
 
 
 class _FreshMass(_MassSlots):
@@ -638,7 +645,7 @@ def _spaced_unions(mass: MassFunction, masses: Mapping, model: Model, bit: dict[
     if 0.0 in values:
         masks = [m for m, v in zip(masks, values) if v > 0.0]
         values = [v for v in values if v > 0.0]
-    mass._set_unions(model, tuple(masks), tuple(values))
+    mass._set_unions(model, masks, values)
     return True
 
 

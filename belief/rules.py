@@ -758,18 +758,33 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
     """
     groups: dict = {}
     get = groups.get
-    join = kind == "join"
-    for a, p in zip(masks1, values1):
-        for b, q in zip(masks2, values2):
-            c = a | b if join else a & b
-            v = p * q
-            group = get(c)
-            if group is None:
-                groups[c] = v                   # one product: no list
-            elif type(group) is float:
-                groups[c] = [group, v]
-            else:
-                group.append(v)
+    if kind == "join":
+        for a, p in zip(masks1, values1):
+            for b, q in zip(masks2, values2):
+                v = p * q
+                group = get(a | b)
+                if group is None:
+                    groups[a | b] = v           # one product: no list
+                elif type(group) is float:
+                    groups[a | b] = [group, v]
+                else:
+                    group.append(v)
+    else:
+        for a, p in zip(masks1, values1):
+            for b, q in zip(masks2, values2):
+                v = p * q
+                group = get(a & b)
+                if group is None:
+                    groups[a & b] = v
+                elif type(group) is float:
+                    groups[a & b] = [group, v]
+                else:
+                    group.append(v)
+    if kind == "dempster" and 0 in groups:
+        del groups[0]
+        normalise = True
+    else:
+        normalise = False
     focal = list(groups)
     sums = []
     for group in groups.values():
@@ -779,9 +794,7 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
             sums.append(group[0] + group[1])
         else:
             sums.append(fsum(group))
-    if kind == "dempster" and 0 in groups:
-        empty = focal.index(0)
-        del focal[empty], sums[empty]
+    if normalise:
         scale = fsum(sums)
         if not scale > 0:
             raise TotalConflictError(_EMPTY_MESSAGE)
@@ -789,8 +802,8 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
     for x in sums:
         if not x > 0:
             pairs = [(f, x) for f, x in zip(focal, sums) if x > 0]
-            return MassFunction._from_masks(model, tuple([f for f, _ in pairs]), tuple([x for _, x in pairs]), True)
-    return MassFunction._from_masks(model, tuple(focal), tuple(sums), True)
+            return MassFunction._from_masks(model, [f for f, _ in pairs], [x for _, x in pairs], True)
+    return MassFunction._from_masks(model, focal, sums, True)
 
 
 def _pcr_joint_loop(model: Model, rule: str, masks: list, values: list) -> MassFunction:
