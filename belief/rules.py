@@ -780,29 +780,22 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
                     groups[a & b] = [group, v]
                 else:
                     group.append(v)
-    if kind == "dempster" and 0 in groups:
+    normalise = kind == "dempster" and 0 in groups
+    if normalise:
         del groups[0]
-        normalise = True
-    else:
-        normalise = False
     focal = list(groups)
-    sums = []
-    for group in groups.values():
-        if type(group) is float:
-            sums.append(group)
-        elif len(group) == 2:
-            sums.append(group[0] + group[1])
-        else:
-            sums.append(fsum(group))
+    sums = [group if type(group) is float else group[0] + group[1] if len(group) == 2 else fsum(group)
+            for group in groups.values()]
     if normalise:
         scale = fsum(sums)
         if not scale > 0:
             raise TotalConflictError(_EMPTY_MESSAGE)
         sums = [x / scale for x in sums]
-    for x in sums:
-        if not x > 0:
-            pairs = [(f, x) for f, x in zip(focal, sums) if x > 0]
-            return MassFunction._from_masks(model, [f for f, _ in pairs], [x for _, x in pairs], True)
+    # Masses are positive: if the product of the smallest two is, so is every product, every sum
+    # and every quotient by a scale of at most one (rounding is monotone), and no zero is dropped.
+    if not min(values1) * min(values2) > 0 and not all(x > 0 for x in sums):
+        pairs = [(f, x) for f, x in zip(focal, sums) if x > 0]
+        return MassFunction._from_masks(model, [f for f, _ in pairs], [x for _, x in pairs], True)
     return MassFunction._from_masks(model, focal, sums, True)
 
 

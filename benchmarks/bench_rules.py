@@ -31,29 +31,44 @@ Each is used only where it implements the case; a missing peer is reported and i
 columns are skipped.  Every library gets the same inputs (fixed seeds), and the results
 are compared with belief's: "agree" means every mass is within 1e-9.
 
-Every measurement runs in a fresh (spawned) process, which first makes one untimed call
-on other inputs (loading lazily initialised code), then:
+Cases (a) and (b) time one combination at a time, the way a researcher calls the library
+on a few mass functions.  Each (case, size, rule) runs in a fresh (spawned) process in
+which belief and every peer that implements the case take turns call by call (the first of
+the turn rotates), so that a load that comes and goes on the machine weighs on all of them
+alike.  Each library first makes one untimed call on other inputs (loading lazily
+initialised code), then, after a garbage collection before every timed call:
 
-* cold: the median of 5 calls (3 with --quick), each on focal elements that the process
-  has not seen before, so belief compiles (and caches) its combination plan inside the
-  timed call, as it does for every new set of focal elements.  For the batch cases the
-  columns of every source are put in a fresh order, which gives belief new focal lists
-  with the same contents;
-* warm: the median of 25 (3) more calls on the inputs of the last cold call (plan cached).
+* cold: the median of 21 calls (5 with --quick), each on focal elements new to the
+  process: the call builds the sources from their dicts ({"h1|h3": mass}) and combines
+  them, and both are timed (the two parts are printed too).  belief compiles no plan
+  for focal elements it meets for the first time (its direct path); its mass functions
+  of unions of hypotheses make their elements and arrays when first read, which the
+  "focal" column times apart (after the cold call, for information);
+* warm: the median of 21 (5) calls combining the sources of the last cold call again
+  (belief compiles or looks up what it keeps for focal elements that come back).
 
-The peers keep no plans; they are timed on the same fresh inputs (median).  Slow peers
-are capped: in (a) and (b) they stop after about 4 s (1 s) of calls, at least one; in
-(c) and (d) they loop over the first rows only (1 000 pairs, 100 rows) and the rate is
-extrapolated.  Only the combination call is timed, not building the inputs.  Ratios are
-the fastest peer's time divided by belief's (above 1, belief is faster).  The targets
-use the warm times, the steady state in which a plan compiled once for a set of focal
-elements serves every later call (a tracker, or any repeated fusion); the cold times,
-which include compiling the plan, are printed beside them.  Targets: (a) k = 128 at
-least 10 times faster than the fastest peer; (b) PCR6
-of 10 sources at least 100 times faster than evidencelib; (c) at least 5 million pairs
-per second; (d) at least 100 000 rows per second for each rule; (e) at least 2 million
-rows per second for dsmc, 1 million for r_rule and 300 000 for pcr6.  A further target is
-that every peer that implements a case agrees with belief.
+A peer stops once its calls took about 4 s (1 s with --quick), after at least one cold
+call; a peer keeps nothing from call to call, and where it ran out of time before the
+warm calls its cold combination times stand for them.
+
+The batch cases (c), (d) and (e) run each library in its own fresh process, with one
+untimed call first:
+
+* cold: the median of 5 calls (3 with --quick), each on batches whose columns come in a
+  fresh order, which gives belief focal lists it has not seen (with the same contents);
+* warm: the median of 5 (3) more calls on the inputs of the last cold call.
+
+Their peers loop over the first rows only (1 000 pairs, 100 rows) and the rate is
+extrapolated; only the combination call is timed, not building the inputs.
+
+Ratios are the fastest peer's time divided by belief's (above 1, belief is faster).
+Targets: (a) and (b), every cold case and every warm case at least as fast as the fastest
+peer (1x), and (c), (d) likewise on their warm calls; (a) k = 128 warm at least 10 times
+faster than the fastest peer; (b) PCR6 of 10 sources warm at least 100 times faster than
+evidencelib; (c) at least 5 million pairs per second; (d) at least 100 000 rows per second
+for each rule; (e) at least 2 million rows per second for dsmc, 1 million for r_rule and
+300 000 for pcr6.  A further target is that every peer that implements a case agrees with
+belief.  ``--check`` exits with status 1 and names every target that failed.
 
 Case (e) has no peer.  Its cold figure is the median of 5 (3) calls, each on fresh rows
 in a fresh column order (a focal list the process has not seen, as in (c) and (d)); warm
@@ -824,10 +839,12 @@ def main(argv: list[str] | None = None) -> int:
         for p in PEERS:
             if not have[p]:
                 print(f"{p} is not installed (pip install \".[bench]\"): its columns are skipped")
-        print(f"Fresh process per measurement; one untimed call first.  cold = median of {sizes['cold']} calls, "
-              "each on focal elements new")
-        print(f"to the process (belief compiles its plan in the call); warm = median of {sizes['warm']} repeats "
-              "of the last one.")
+        print("(a), (b): one fresh process per case, the libraries taking turns call by call; cold = build the "
+              "sources from dicts")
+        print(f"of new focal elements + combine (median of {sizes['single_cold']}), warm = combine them again "
+              f"(median of {sizes['single_warm']}).")
+        print(f"(c)-(e): a fresh process per library and case; cold = median of {sizes['cold']} calls on focal "
+              f"lists new to the process, warm = {sizes['warm']} repeats.")
         print("Peers: median over the same inputs (a count in brackets = fewer calls, capped at about "
               f"{sizes['peer_budget']:g} s).")
         print("x = fastest peer's time / belief's time (above 1: belief faster).  Times in ms.")
