@@ -245,7 +245,7 @@ def tuple_plan(source_model: Model, model: Model, focal) -> TuplePlan:
     if plan is None:
         plan = TuplePlan(source_model, model, tuple(k.focal for k in keys))
         if len(_PLANS) >= PLAN_CACHE_SIZE:
-            del _PLANS[next(iter(_PLANS))]
+            evict(_PLANS)
     _PLANS[key] = plan                       # most recently used last
     return plan
 
@@ -262,9 +262,20 @@ def sighted(source_model: Model, model: Model, keys: tuple[FocalKey, ...], purpo
         _SIGHTINGS[key] = True
         return True
     if len(_SIGHTINGS) >= SIGHTINGS_SIZE:
-        del _SIGHTINGS[next(iter(_SIGHTINGS))]
+        evict(_SIGHTINGS)
     _SIGHTINGS[key] = True
     return False
+
+
+def evict(cache: dict) -> None:
+    """Drop the least recently used entry of a cache kept as a dict (the first in insertion order).
+
+    Another thread may have changed the dict meanwhile; then there is nothing to do.
+    """
+    try:
+        del cache[next(iter(cache))]
+    except (KeyError, RuntimeError, StopIteration):
+        pass
 
 
 #: Compiled plans and seen focal lists, least recently used first (dicts keep insertion order).

@@ -37,8 +37,8 @@ from belief.frame import Element
 from belief.mass import MassFunction, _union_context
 from belief.model import Model
 from belief.plan import (MAX_TUPLES, Encoding, Scatter, TuplePlan, _exclusive, canonical_codes,
-                         decode, encode, gather_product, plan_lookup, row_chunks, sighted, tuple_codes, tuple_plan,
-                         union_ranks)
+                         decode, encode, evict, gather_product, plan_lookup, row_chunks, sighted, tuple_codes,
+                         tuple_plan, union_ranks)
 
 __all__ = ["combine", "sequential", "inconsistency", "RULES", "RuleInfo", "get_rule", "register_rule",
            "rule_names", "UnknownRuleError", "ENGINES", "R_MODES", "EMPTY_MODES"]
@@ -927,11 +927,11 @@ def _single_seen(key: tuple, table) -> None:
     """Keep ``table`` if ``key`` was met before (its focal elements came back); else remember ``key``."""
     if _SINGLE_SIGHTINGS.pop(key, False):
         if len(_SINGLE_TABLES) >= SINGLE_CACHE_SIZE:
-            del _SINGLE_TABLES[next(iter(_SINGLE_TABLES))]
+            evict(_SINGLE_TABLES)
         _SINGLE_TABLES[key] = table
         return
     if len(_SINGLE_SIGHTINGS) >= SINGLE_CACHE_SIZE:
-        del _SINGLE_SIGHTINGS[next(iter(_SINGLE_SIGHTINGS))]
+        evict(_SINGLE_SIGHTINGS)
     _SINGLE_SIGHTINGS[key] = True
 
 
