@@ -41,7 +41,7 @@ from belief.plan import (MAX_TUPLES, Encoding, Scatter, TuplePlan, _exclusive, c
                          tuple_plan, union_ranks)
 
 __all__ = ["combine", "sequential", "inconsistency", "RULES", "RuleInfo", "get_rule", "register_rule",
-           "rule_names", "UnknownRuleError", "ENGINES", "R_MODES", "EMPTY_MODES"]
+           "unregister_rule", "rule_names", "UnknownRuleError", "ENGINES", "R_MODES", "EMPTY_MODES"]
 
 
 class UnknownRuleError(BeliefError, KeyError):
@@ -95,10 +95,31 @@ def register_rule(name: str, *, summary: str, associative: bool, keeps_conflict:
         info = RuleInfo(name, function, summary, associative, keeps_conflict, tuple(aliases), tuple(options))
         RULES[name] = info
         for key in (name, *aliases):
-            _ALIASES[key.lower()] = name
+            # The spelling get_rule looks names up by: case and "-" / "_" do not matter.
+            _ALIASES[key.lower().replace("-", "_")] = name
         return function
 
     return decorate
+
+
+def unregister_rule(name: str) -> RuleInfo:
+    """Remove a registered rule and its aliases from the registry; returns its :class:`RuleInfo`.
+
+    For rules registered for a while, as a test registers a toy rule and removes it again.
+
+    >>> @register_rule("toy", summary="a toy rule", associative=False, aliases=("toy-rule",))
+    ... def toy(sources, model):
+    ...     return sources[0]
+    >>> unregister_rule("toy-rule").name
+    'toy'
+    >>> "toy" in RULES, get_rule("conjunctive").name
+    (False, 'conjunctive')
+    """
+    info = get_rule(name)
+    del RULES[info.name]
+    for key in [k for k, target in _ALIASES.items() if target == info.name]:
+        del _ALIASES[key]
+    return info
 
 
 def rule_names() -> list[str]:
