@@ -32,9 +32,11 @@ class _MassSlots(Mapping):
     holds the focal elements, ``_values`` (array) or ``_floats`` (tuple) their masses; the
     missing one of each pair is made from the other when first read.  With ``_loose``,
     ``_masks`` and ``_floats`` are not yet in canonical order (they are sorted then too).
+    ``_memo`` keeps what :func:`belief.rules.combine` learnt of the last partner of this mass
+    function, for the next combination of the same two.
     """
 
-    __slots__ = ("model", "_focal", "_values", "_batch", "_hash", "_masks", "_floats", "_loose")
+    __slots__ = ("model", "_focal", "_values", "_batch", "_hash", "_masks", "_floats", "_loose", "_memo")
 
 
 class MassFunction(_MassSlots):
@@ -113,6 +115,7 @@ class MassFunction(_MassSlots):
                         self._masks = masks
                         self._floats = values
                         self._loose = True
+                        self._memo = None
                         self.__class__ = MassFunction
                     else:
                         self._set_unions(model, masks, values)
@@ -132,10 +135,12 @@ class MassFunction(_MassSlots):
             self._masks = masks
             self._floats = values
             self._loose = True
+            self._memo = None
             self.__class__ = MassFunction
         else:
             for name, value in (("model", model), ("_focal", None), ("_values", None), ("_batch", None),
-                                ("_hash", None), ("_masks", masks), ("_floats", values), ("_loose", True)):
+                                ("_hash", None), ("_masks", masks), ("_floats", values), ("_loose", True),
+                                ("_memo", None)):
                 _set(self, name, value)
 
     def _plain_init(self, masses: Mapping[Query, float], model: Model) -> bool:
@@ -205,6 +210,7 @@ class MassFunction(_MassSlots):
         object.__setattr__(self, "_masks", None)
         object.__setattr__(self, "_floats", None)
         object.__setattr__(self, "_loose", False)
+        object.__setattr__(self, "_memo", None)
         return True
 
     def _checked_init(self, masses: Mapping[Query, float], model: Model, subnormal: bool) -> None:
@@ -242,6 +248,7 @@ class MassFunction(_MassSlots):
         object.__setattr__(self, "_masks", None)
         object.__setattr__(self, "_floats", None)
         object.__setattr__(self, "_loose", False)
+        object.__setattr__(self, "_memo", None)
 
     @classmethod
     def _trusted(cls, model: Model, focal: tuple[Element, ...], values) -> "MassFunction":
@@ -264,6 +271,7 @@ class MassFunction(_MassSlots):
         obj._focal = obj._batch = obj._hash = None
         obj._masks = masks
         obj._loose = loose
+        obj._memo = None
         if type(values) is not np.ndarray:
             obj._values = None
             obj._floats = values

@@ -34,7 +34,7 @@ from belief.batch import MassBatch, check_refines
 from belief.bayesian import ENGINES
 from belief.errors import BeliefError, FrameError, InvalidMassError, ModelError, TotalConflictError
 from belief.frame import Element
-from belief.mass import MassFunction, _union_context
+from belief.mass import MassFunction, _set, _union_context
 from belief.model import Model
 from belief.plan import (MAX_TUPLES, Encoding, Scatter, TuplePlan, _exclusive, canonical_codes,
                          decode, encode, evict, gather_product, plan_lookup, row_chunks, sighted, tuple_codes,
@@ -706,7 +706,7 @@ def _single(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> M
     if count <= SINGLE_LOOP_TUPLES and len(masks) == 2 and kind in ("meet", "dempster", "join"):
         a, b = sources
         return _pair_loop(source_model, kind, masks[0], a._floats or a._union_floats(), masks[1],
-                          b._floats or b._union_floats())
+                          b._floats or b._union_floats(), a)
     if count <= PCR_LOOP_TUPLES and kind in ("pcr5", "pcr6"):
         if any(0 in mk for mk in masks):
             return None                         # mass on ∅: the general path refuses it
@@ -768,7 +768,7 @@ def _single(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> M
 
 
 def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[float, ...], masks2: tuple[int, ...],
-               values2: tuple[float, ...]) -> MassFunction:
+               values2: tuple[float, ...], owner: MassFunction | None = None) -> MassFunction:
     """Two mass functions, a few tuples, a rule of the ∩ or ∪ kind: :func:`_single` in one Python function.
 
     The products that reach one element are added by ``math.fsum``, and Dempster's
@@ -776,7 +776,21 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
     which do not depend on the order of the focal elements, so that the sources need not
     be sorted first and the result is left to sort itself when read.  They agree with the
     plan's sums within a few units in the last place.
+
+    ``owner`` (the first mass function) remembers its partner's focal elements: when the
+    same two meet again, the grouping of the tuples is made once and kept on it
+    (:func:`_pair_table`), and later calls only multiply and add.
     """
+    key = "join" if kind == "join" else "meet"
+    if owner is not None:
+        memo = owner._memo
+        if memo is not None and memo[0] is masks1 and memo[1] is masks2 and memo[2] == key:
+            table = memo[3]
+            if table is None:
+                table = _pair_table(masks1, masks2, key)
+                _set(owner, "_memo", (masks1, masks2, key, table))
+            return _pair_from_table(model, kind, table, values1, values2)
+        _set(owner, "_memo", (masks1, masks2, key, None))
     groups: dict = {}
     get = groups.get
     if kind == "join":
@@ -814,6 +828,47 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
         sums = [x / scale for x in sums]
     # Masses are positive: if the product of the smallest two is, so is every product, every sum
     # and every quotient by a scale of at most one (rounding is monotone), and no zero is dropped.
+    if not min(values1) * min(values2) > 0 and not all(x > 0 for x in sums):
+        pairs = [(f, x) for f, x in zip(focal, sums) if x > 0]
+        return MassFunction._from_masks(model, [f for f, _ in pairs], [x for _, x in pairs], True)
+    return MassFunction._from_masks(model, focal, sums, True)
+
+
+def _pair_table(masks1, masks2, key: str) -> tuple:
+    """How the tuples of two focal lists group by target: the targets, the columns of each group's tuples, the sizes."""
+    groups: dict[int, list[tuple[int, int]]] = {}
+    for i, a in enumerate(masks1):
+        for j, b in enumerate(masks2):
+            groups.setdefault(a | b if key == "join" else a & b, []).append((i, j))
+    focal = list(groups)
+    rows = [i for group in groups.values() for i, _ in group]
+    columns = [j for group in groups.values() for _, j in group]
+    sizes = [len(group) for group in groups.values()]
+    empty = focal.index(0) if 0 in groups else None
+    return focal, rows, columns, sizes, empty
+
+
+def _pair_from_table(model: Model, kind: str, table: tuple, values1, values2) -> MassFunction:
+    """:func:`_pair_loop` on the grouping of :func:`_pair_table`: the same sums."""
+    focal, rows, columns, sizes, empty = table
+    products = [values1[i] * values2[j] for i, j in zip(rows, columns)]
+    sums = []
+    start = 0
+    for size in sizes:
+        if size == 1:
+            sums.append(products[start])
+        elif size == 2:
+            sums.append(products[start] + products[start + 1])
+        else:
+            sums.append(fsum(products[start:start + size]))
+        start += size
+    focal = list(focal)
+    if kind == "dempster" and empty is not None:
+        del focal[empty], sums[empty]
+        scale = fsum(sums)
+        if not scale > 0:
+            raise TotalConflictError(_EMPTY_MESSAGE)
+        sums = [x / scale for x in sums]
     if not min(values1) * min(values2) > 0 and not all(x > 0 for x in sums):
         pairs = [(f, x) for f, x in zip(focal, sums) if x > 0]
         return MassFunction._from_masks(model, [f for f, _ in pairs], [x for _, x in pairs], True)
