@@ -645,6 +645,7 @@ PCR_LOOP_TUPLES = 128
 #: How many single-row tables (:func:`_single_table`) are kept for focal elements that come back.
 SINGLE_CACHE_SIZE = 1024
 
+_PAIR_KINDS = frozenset(("meet", "dempster", "join"))
 _SINGLE_TABLES: dict[tuple, tuple] = {}
 _SINGLE_SIGHTINGS: dict[tuple, bool] = {}
 _EMPTY_MESSAGE = ("dempster: total conflict between the sources, m(∅) = 1; "
@@ -668,6 +669,18 @@ def _single(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> M
     kind = _SINGLE_RULES.get(info.function)
     if kind is None:
         return None
+    if len(sources) == 2 and kind in _PAIR_KINDS:
+        # The commonest call, two mass functions just built from unions of hypotheses, checked first.
+        a, b = sources
+        if type(a) is MassFunction and type(b) is MassFunction:
+            source_model = a.model
+            masks1 = a._masks
+            masks2 = b._masks
+            if (b.model is source_model and (model is None or model is source_model) and masks1 is not None
+                    and masks2 is not None and len(masks1) * len(masks2) <= SINGLE_LOOP_TUPLES
+                    and source_model._unions and source_model.kind == "shafer"):
+                return _pair_loop(source_model, kind, masks1, a._floats or a._union_floats(), masks2,
+                                  b._floats or b._union_floats(), a)
     if len(sources) == 1 and isinstance(sources[0], (list, tuple)):
         sources = sources[0]
     if len(sources) < 2 or type(sources[0]) is not MassFunction:
