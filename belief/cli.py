@@ -144,14 +144,19 @@ def _cmd_measures(args: argparse.Namespace) -> int:
 
 
 # -- transform ---------------------------------------------------------------------------------------
+def _refuse_extras(args: argparse.Namespace, option: str) -> None:
+    """--normalized and --query belong to other transforms than ``option``."""
+    for flag in ("normalized", "query"):
+        if getattr(args, flag):
+            raise CommandError(f"belief transform: error: --{flag} does not go with {option}")
+
+
 def _cmd_transform(args: argparse.Namespace) -> int:
     m = _read_bba(args.bba)
     if args.plausibility:
         from belief.representations import plausibility_transform
 
-        for flag in ("normalized", "query"):
-            if getattr(args, flag):
-                raise CommandError(f"belief transform: error: --{flag} does not go with --plausibility")
+        _refuse_extras(args, "--plausibility")
         probability = dict(zip(m.frame.hypotheses, plausibility_transform(m).tolist()))
         if args.json:
             _print_json({"probability": probability})
@@ -161,9 +166,7 @@ def _cmd_transform(args: argparse.Namespace) -> int:
     if args.contextual_discount is not None:
         from belief.representations import contextual_discount
 
-        for flag in ("normalized", "query"):
-            if getattr(args, flag):
-                raise CommandError(f"belief transform: error: --{flag} does not go with --contextual-discount")
+        _refuse_extras(args, "--contextual-discount")
         rates = _read_json(args.contextual_discount, "discount-rates file")
         if not isinstance(rates, dict):
             raise FormatError(f"{args.contextual_discount}: the discount rates must be a JSON object mapping each "

@@ -171,3 +171,11 @@ def test_the_rules_of_the_toolkit_are_combined_by_name(capsys, files, tmp_path):
         code, out, err = run(capsys, "combine", files["first"], files["second"], "--rule", rule, "--json")
         assert code == 0, (rule, err)
         assert sum(json.loads(out)["mass"].values()) == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("option", [["--plausibility"], ["--contextual-discount", "rates.json"]])
+@pytest.mark.parametrize("extra", [["--normalized"], ["--query", "a"]])
+def test_transform_refuses_options_of_other_transforms(capsys, files, option, extra):
+    code, out, err = run(capsys, "transform", files["first"], *option, *extra)
+    assert code == 2 and out == ""
+    assert f"{extra[0]} does not go with {option[0]}" in err and len(err.strip().splitlines()) == 1
