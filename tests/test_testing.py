@@ -134,11 +134,19 @@ def test_the_r_rule_is_commutative_for_two_sources():
 UNCLAIMED = [(rule, law) for rule in sorted(HOLDS) for law in CLAIMED if law not in HOLDS[rule]]
 
 
+#: Counterexamples that need two conflicting sources beside the vacuous one, hence a model with constraints:
+#: drawn from Shafer's and hybrid models only, and given more examples.  Under the default search (every
+#: kind, 100 examples) one seed in six found none.
+RARE = {(rule, "vacuous neutrality"): {"kinds": ("shafer", "hybrid"), "max_examples": 300}
+        for rule in ("dsmh", "dubois_prade", "pcr5", "pcr6")}
+
+
 @pytest.mark.parametrize(("rule", "law"), UNCLAIMED)
 def test_the_laws_a_rule_does_not_claim_fail(rule, law):
     # So the table above is exact: every law either holds (previous tests) or has a counterexample.
+    search = {"max_examples": 100, **SOURCES.get(rule, {}), **RARE.get((rule, law), {})}
     with pytest.raises(AssertionError, match=f"^{law}"):
-        check_rule(rule, **claims({law}), **SOURCES.get(rule, {}), max_examples=100, settings=FIND_QUICKLY)
+        check_rule(rule, **claims({law}), **search, settings=FIND_QUICKLY)
 
 
 def test_the_vacuous_mass_function_is_neutral_for_one_source_under_pcr5_pcr6_dubois_prade_and_dsmh():
