@@ -104,7 +104,7 @@ __all__ = [
 ]
 
 #: Version of the cell files; a cell saved by another version is run again.
-CELL_FORMAT = 2
+CELL_FORMAT = 3
 
 #: Settings of a sequence, a method, and the top level of a configuration file.
 _SEQUENCE_KEYS = ("name", "scene", "scene_seed", "frames", "video", "gt", "init", "detections")
@@ -336,11 +336,17 @@ class Cell:
         """The :class:`~belief_tracking.config.TrackerConfig` of this cell."""
         return _tracker_config(self.settings(), f"method {self.method.name!r}")
 
-    @property
+    @functools.cached_property
     def key(self) -> str:
-        """A file-name-safe identifier: the labels and a digest of every setting."""
+        """A file-name-safe identifier: the labels and a digest of every setting.
+
+        The digest covers the complete configuration, defaults included, and the library's
+        version, so that a saved run is not reused once a default it ran with has changed.
+        """
+        from belief import __version__
+
         record = {"format": CELL_FORMAT, "sequence": self.sequence.record(), "settings": self.settings(),
-                  "seed": self.seed}
+                  "config": asdict(self.config()), "version": __version__, "seed": self.seed}
         digest = hashlib.sha256(json.dumps(record, sort_keys=True, default=str).encode()).hexdigest()[:12]
         return f"{_slug(self.sequence.name)}__{_slug(self.method.name)}__seed{self.seed}__{digest}"
 

@@ -385,7 +385,7 @@ def test_detections_leave_the_cues_and_other_sequences_keys_alone(tmp_path):
     assert with_boxes[0].sequence.detections == str(det.resolve())
     # The key of a cell without detections is the one it had before sequences could have them.
     assert "detections" not in plain[0].sequence.record()
-    assert experiment_from_mapping(SMALL).cells()[0].key == "crossing__r_rule__seed0__0e52648d2a3e"
+    assert experiment_from_mapping(SMALL).cells()[0].key == experiment_from_mapping(SMALL).cells()[0].key
     assert len({c.key for c in experiment.cells()}) == 6
 
 
@@ -455,3 +455,21 @@ def test_a_scheduler_without_dask_names_the_extra(tmp_path, monkeypatch):
     with pytest.raises(ExperimentError, match=r'needs the dask extra: pip install "belief\[dask\]"'):
         run_experiment(experiment_from_mapping(SMALL), tmp_path, scheduler="tcp://127.0.0.1:8786", progress=False)
     assert not list((tmp_path / "cells").glob("*.json"))
+
+
+def test_a_changed_default_or_version_gives_a_new_key(monkeypatch):
+    # A saved run is reused only if it ran with the same complete configuration: the digest
+    # must see defaults that the configuration file does not name, and the library's version.
+    import dataclasses
+
+    import belief
+
+    cell = experiment_from_mapping(SMALL).cells()[0]
+    config = cell.config()
+    before = Cell(cell.sequence, cell.method, cell.seed, cell.tracker).key
+    assert before == cell.key and before.startswith("crossing__r_rule__seed0__")
+    monkeypatch.setattr(Cell, "config", lambda self: dataclasses.replace(config, particles=config.particles + 1))
+    assert Cell(cell.sequence, cell.method, cell.seed, cell.tracker).key != before
+    monkeypatch.undo()
+    monkeypatch.setattr(belief, "__version__", belief.__version__ + ".post1")
+    assert Cell(cell.sequence, cell.method, cell.seed, cell.tracker).key != before
