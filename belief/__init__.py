@@ -19,12 +19,14 @@ from belief.batch import MassBatch
 from belief.bayesian import ClosedFormBatch, exclusive_split
 from belief.errors import (
     BeliefError,
+    CombinationTooLargeError,
     FormatError,
     FrameError,
     InvalidMassError,
     LatticeTooLargeError,
     ModelError,
     ParseError,
+    ResourceLimitError,
     TotalConflictError,
     UndefinedTransformError,
     UnknownHypothesisError,
@@ -41,6 +43,7 @@ __version__ = "0.1.0"
 __all__ = [
     "BeliefError",
     "ClosedFormBatch",
+    "CombinationTooLargeError",
     "ENGINES",
     "Element",
     "FormatError",
@@ -54,6 +57,7 @@ __all__ = [
     "Model",
     "ModelError",
     "ParseError",
+    "ResourceLimitError",
     "TotalConflictError",
     "UndefinedTransformError",
     "UnknownHypothesisError",

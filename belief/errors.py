@@ -15,7 +15,9 @@ __all__ = [
     "ParseError",
     "ModelError",
     "InvalidMassError",
+    "ResourceLimitError",
     "LatticeTooLargeError",
+    "CombinationTooLargeError",
     "TotalConflictError",
     "FormatError",
     "UndefinedTransformError",
@@ -49,8 +51,20 @@ class InvalidMassError(BeliefError, ValueError):
     """Masses are not finite, negative, do not sum to one, or sit on an empty element."""
 
 
-class LatticeTooLargeError(BeliefError, ValueError):
+class ResourceLimitError(BeliefError, ValueError):
+    """A job would take more time or memory than a configurable limit allows; the message names the limit."""
+
+
+class LatticeTooLargeError(ResourceLimitError):
     """Enumerating the hyper-power set (or a graph of it) would not fit in memory or time."""
+
+
+class CombinationTooLargeError(ResourceLimitError):
+    """A combination would visit too many tuples of focal elements, or need too much time or memory.
+
+    The message names the limit of :mod:`belief.plan` that the job exceeds (``MAX_TUPLES``,
+    ``MAX_WORK``, ``MAX_BYTES`` or ``MAX_ELEMENT_TUPLES``) and its estimate of the job.
+    """
 
 
 class TotalConflictError(BeliefError, ArithmeticError):

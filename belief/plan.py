@@ -20,6 +20,7 @@ a few dozen tuples) and no element is built per tuple.  :func:`plan_lookup` and
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
@@ -27,15 +28,27 @@ from typing import NamedTuple
 
 import numpy as np
 
+from belief.errors import CombinationTooLargeError
 from belief.frame import Element, Frame, make_elements
 from belief.model import Model
 
-__all__ = ["TuplePlan", "Scatter", "FocalKey", "tuple_plan", "MAX_TUPLES", "Encoding", "encode", "coded_table",
-           "canonical_codes", "plan_lookup", "sighted", "mask_terms", "union_ranks", "union_elements",
-           "RANK_TABLE_WIDTH"]
+__all__ = ["TuplePlan", "Scatter", "FocalKey", "tuple_plan", "MAX_TUPLES", "MAX_WORK", "MAX_BYTES",
+           "MAX_ELEMENT_TUPLES", "JobCost", "joint_cost", "check_joint", "FoldBudget", "coded_fast", "Encoding",
+           "encode", "coded_table", "canonical_codes", "plan_lookup", "sighted", "mask_terms", "union_ranks",
+           "union_elements", "RANK_TABLE_WIDTH"]
 
-#: Refuse joint combinations with more focal-element tuples than this.
-MAX_TUPLES = 20_000_000
+# The limits below are read when a combination starts, so a caller may raise them
+# (``belief.plan.MAX_TUPLES = ...``).  The defaults keep an accepted job under about ten
+# seconds and a gigabyte on a two-core machine; every refusal is a CombinationTooLargeError
+# that names the limit.
+#: A joint combination (a rule that is not associative) visits at most this many tuples of focal elements.
+MAX_TUPLES = 4_000_000
+#: A combination does at most this much work: rows × tuples × sources, weighted by the rule (:func:`joint_cost`).
+MAX_WORK = 200_000_000
+#: The index tables of a joint combination take at most about this many bytes.
+MAX_BYTES = 768 * 2**20
+#: Models whose focal elements have no codes of 64 bits combine element by element: at most this many tuples.
+MAX_ELEMENT_TUPLES = 25_000
 #: Rows are processed in chunks of about this many (row × tuple) entries, to bound memory.
 CHUNK_ENTRIES = 1 << 18
 #: Models that allow more Venn regions than this get no region codes (:func:`encode`).
@@ -134,7 +147,7 @@ class TuplePlan:
 
     @cached_property
     def count(self) -> int:
-        return int(np.prod(self.sizes, dtype=np.int64))
+        return math.prod(self.sizes)        # a Python int: an int64 product wraps past 2^63 tuples
 
     @cached_property
     def columns(self) -> tuple[np.ndarray, ...]:
@@ -142,8 +155,8 @@ class TuplePlan:
         sizes = self.sizes
         columns = []
         for i, size in enumerate(sizes):
-            inner = int(np.prod(sizes[i + 1:], dtype=np.int64))
-            outer = int(np.prod(sizes[:i], dtype=np.int64))
+            inner = math.prod(sizes[i + 1:])
+            outer = math.prod(sizes[:i])
             columns.append(np.tile(np.repeat(np.arange(size, dtype=np.int64), inner), outer))
         return tuple(columns)
 
@@ -539,3 +552,171 @@ def row_chunks(n_rows: int, width: int):
     step = max(1, CHUNK_ENTRIES // max(1, width))
     for start in range(0, n_rows, step):
         yield slice(start, min(n_rows, start + step))
+
+
+# -- the cost of a combination, estimated before it starts -----------------------------------------------
+#: Relative time per row × tuple × source of each kind of evaluation, as (numerator, denominator).
+_WORK_WEIGHTS = {"pcr": (1, 1), "targets": (1, 4), "fold": (1, 4)}
+#: Bytes of index tables per tuple × source (measured: the PCR tables keep several int64 copies of the columns).
+_ENTRY_BYTES = {"pcr": 64, "targets": 12, "fold": 12}
+#: Building the tables of a combination costs about as much as evaluating this many rows on them.
+TABLE_ROWS = 8
+
+
+class JobCost(NamedTuple):
+    """The estimated size of a combination (Python ints: they never wrap)."""
+
+    tuples: int
+    work: int
+    bytes: int
+
+
+def joint_cost(sizes: Sequence[int], rows: int = 1, kind: str = "pcr", pcr5: bool = False) -> JobCost:
+    """The cost of visiting every tuple of focal elements of sources of these sizes.
+
+    Parameters
+    ----------
+    sizes : sequence of int
+        The number of focal elements of each source, shape (s,).
+    rows : int
+        The number of rows of the batch.
+    kind : {"pcr", "targets", "fold"}
+        ``"pcr"``: PCR5 / PCR6 shares; ``"targets"``: one target per tuple (DSmH,
+        Dubois–Prade); ``"fold"``: one pairwise step of an associative rule.
+    pcr5 : bool
+        PCR5 groups the equal elements of a tuple, in time quadratic in the sources.
+
+    Returns
+    -------
+    JobCost
+        ``tuples`` = Π sizes; ``work`` = rows × tuples × s (the tables counted as
+        :data:`TABLE_ROWS` rows), weighted by the kind; ``bytes`` = tuples × s × the bytes per
+        entry of the kind's tables.
+
+    Examples
+    --------
+    >>> joint_cost([2] * 64).tuples == 2 ** 64      # no int64 wrap-around
+    True
+    >>> joint_cost([3, 3, 3], rows=2)
+    JobCost(tuples=27, work=810, bytes=5184)
+    """
+    tuples = math.prod(sizes)
+    s = len(sizes)
+    numerator, denominator = _WORK_WEIGHTS[kind]
+    if pcr5:
+        numerator, denominator = numerator * max(5, s), denominator * 5
+    work = tuples * s * (rows + TABLE_ROWS) * numerator // denominator
+    return JobCost(tuples, work, tuples * s * _ENTRY_BYTES[kind])
+
+
+def _refuse(what: str, limit: str, value: int, unit: str = "") -> CombinationTooLargeError:
+    return CombinationTooLargeError(f"{what}, more than belief.plan.{limit} = {value:,}{unit}; use fewer focal "
+                                    f"elements, sources or rows, or raise belief.plan.{limit}")
+
+
+def check_joint(rule: str, sizes: Sequence[int], rows: int = 1, kind: str = "pcr", fast=True,
+                pcr5: bool = False) -> JobCost:
+    """Refuse a joint combination that would exceed :data:`MAX_TUPLES`, :data:`MAX_WORK` or :data:`MAX_BYTES`.
+
+    ``fast=False`` says that the focal elements have no 64-bit codes, so that every tuple
+    is combined element by element, at most :data:`MAX_ELEMENT_TUPLES` of them; ``fast`` may
+    be a callable, asked only when there are more tuples than that.
+
+    Raises
+    ------
+    CombinationTooLargeError
+        Naming the limit exceeded and the estimate.
+
+    Examples
+    --------
+    >>> check_joint("pcr6", [2] * 64)
+    Traceback (most recent call last):
+    ...
+    belief.errors.CombinationTooLargeError: joint pcr6 combination of 64 sources visits 18,446,744,073,709,551,616 \
+tuples of focal elements, more than belief.plan.MAX_TUPLES = 4,000,000; use fewer focal elements, sources or rows, \
+or raise belief.plan.MAX_TUPLES
+    """
+    cost = joint_cost(sizes, rows, kind, pcr5)
+    what = f"joint {rule} combination of {len(sizes)} sources visits {cost.tuples:,} tuples of focal elements"
+    if cost.tuples > MAX_TUPLES:
+        raise _refuse(what, "MAX_TUPLES", MAX_TUPLES)
+    if cost.tuples > MAX_ELEMENT_TUPLES and not (fast() if callable(fast) else fast):
+        raise _refuse(what + " element by element (the model gives them no 64-bit codes)", "MAX_ELEMENT_TUPLES",
+                      MAX_ELEMENT_TUPLES)
+    if cost.work > MAX_WORK:
+        raise _refuse(f"{what} in {rows:,} row{'s' if rows != 1 else ''}, about {cost.work:,} units of work",
+                      "MAX_WORK", MAX_WORK)
+    if cost.bytes > MAX_BYTES:
+        raise _refuse(f"{what}, with index tables of about {cost.bytes:,} bytes", "MAX_BYTES", MAX_BYTES, " bytes")
+    return cost
+
+
+class FoldBudget:
+    """The running cost of an associative rule folded pairwise, checked before each step.
+
+    The partial results of a fold may grow at every step (on a free model, up to the
+    product of the sources' sizes), so the cost is not known in advance: each step is
+    checked before it runs, against the limits of :func:`check_joint` applied to the
+    whole fold so far.
+
+    Examples
+    --------
+    >>> budget = FoldBudget("dempster", 3, rows=1)
+    >>> budget.step(4, 5, 2)
+    >>> budget.tuples
+    20
+    """
+
+    __slots__ = ("rule", "sources", "rows", "fast", "slow_reason", "tuples", "work")
+
+    def __init__(self, rule: str, sources: int, rows: int = 1, fast=True,
+                 slow_reason: str = "the model gives them no 64-bit codes") -> None:
+        self.rule = rule
+        self.sources = sources
+        self.rows = rows
+        self.fast = fast                # a bool, or a callable that tells (asked only when it matters)
+        self.slow_reason = slow_reason
+        self.tuples = 0
+        self.work = 0
+
+    def step(self, left: int, right: int, source: int) -> None:
+        """Account for a step that combines a partial result of ``left`` focal elements with ``source`` (``right``)."""
+        cost = joint_cost((left, right), self.rows, "fold")
+        self.tuples += cost.tuples
+        self.work += cost.work
+        what = (f"{self.rule} of {self.sources} sources, folded pairwise, would visit {self.tuples:,} tuples of focal "
+                f"elements by source {source} (its partial result has {left:,} focal elements)")
+        if cost.tuples > MAX_TUPLES:
+            raise _refuse(what, "MAX_TUPLES", MAX_TUPLES)
+        if self.tuples > MAX_ELEMENT_TUPLES:
+            if callable(self.fast):
+                self.fast = bool(self.fast())
+            if not self.fast:
+                raise _refuse(f"{what} element by element ({self.slow_reason})", "MAX_ELEMENT_TUPLES",
+                              MAX_ELEMENT_TUPLES)
+        if self.work > MAX_WORK:
+            raise _refuse(f"{what}, about {self.work:,} units of work in {self.rows:,} row"
+                          f"{'s' if self.rows != 1 else ''}", "MAX_WORK", MAX_WORK)
+        if cost.bytes > MAX_BYTES:
+            raise _refuse(f"{what}, with index tables of about {cost.bytes:,} bytes", "MAX_BYTES", MAX_BYTES,
+                          " bytes")
+
+
+def coded_fast(model: Model, focal: Sequence[Sequence[Element]] = ()) -> bool:
+    """Whether elements of ``model`` (or at least these focal elements) have codes of at most 64 bits (:func:`encode`).
+
+    Without codes, tuples are combined element by element, thousands of times slower.
+    """
+    if model.kind == "shafer":
+        return True
+    table = _region_table(model)
+    if table is not None and table[1] <= 64:
+        return True
+    used = 0
+    for elements in focal:
+        for x in elements:
+            for t in x.terms:
+                if t & (t - 1):
+                    return False
+                used |= t
+    return bool(focal) and _exclusive(model, used)

@@ -20,6 +20,7 @@ stricter model for the fusion (see :meth:`belief.model.Model.is_refined_by`).
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache, reduce
@@ -30,15 +31,16 @@ from typing import Any, Union
 import numpy as np
 
 from belief import bayesian
+from belief import plan as limits
 from belief.batch import MassBatch, check_refines
 from belief.bayesian import ENGINES
 from belief.errors import BeliefError, FrameError, InvalidMassError, ModelError, TotalConflictError
 from belief.frame import Element
 from belief.mass import MassFunction, _set, _union_context
 from belief.model import Model
-from belief.plan import (MAX_TUPLES, Encoding, Scatter, TuplePlan, _exclusive, canonical_codes,
-                         decode, encode, evict, gather_product, plan_lookup, row_chunks, sighted, tuple_codes,
-                         tuple_plan, union_ranks)
+from belief.plan import (Encoding, FoldBudget, Scatter, TuplePlan, _exclusive, canonical_codes, check_joint,
+                         coded_fast, decode, encode, evict, gather_product, plan_lookup, row_chunks, sighted,
+                         tuple_codes, tuple_plan, union_ranks)
 
 __all__ = ["combine", "sequential", "inconsistency", "RULES", "RuleInfo", "get_rule", "register_rule",
            "unregister_rule", "rule_names", "UnknownRuleError", "ENGINES", "R_MODES", "EMPTY_MODES"]
@@ -293,14 +295,23 @@ def _values(batches: Sequence[MassBatch]) -> tuple[int, list[np.ndarray]]:
     return n, [b.values if len(b) == n else np.broadcast_to(b.values, (n, b.values.shape[1])) for b in batches]
 
 
-def _plan(batches: Sequence[MassBatch], model: Model) -> TuplePlan:
-    plan = tuple_plan(batches[0].model, model, tuple(b.focal_key for b in batches))
-    if plan.count > MAX_TUPLES:
-        raise InvalidMassError(
-            f"joint combination of {len(batches)} sources visits {plan.count:,} tuples of focal elements, "
-            f"more than {MAX_TUPLES:,}; use fewer focal elements or sources"
-        )
-    return plan
+def _plan(batches: Sequence[MassBatch], model: Model, rule: str = "") -> TuplePlan:
+    sizes = [len(b.focal) for b in batches]
+    if math.prod(sizes) > limits.MAX_TUPLES:
+        check_joint(rule or "the", sizes, max(len(b) for b in batches), "targets")
+    return tuple_plan(batches[0].model, model, tuple(b.focal_key for b in batches))
+
+
+def _check_joint(batches: Sequence[MassBatch], model: Model, rule: str, kind: str) -> None:
+    """Refuse a joint combination of these sources that would exceed the limits of :mod:`belief.plan`."""
+    check_joint(rule, [len(b.focal) for b in batches], max(len(b) for b in batches), kind,
+                lambda: coded_fast(model, [b.focal for b in batches]), rule == "pcr5")
+
+
+def _budget(batches: Sequence[MassBatch], model: Model, rule: str) -> FoldBudget:
+    """The :class:`~belief.plan.FoldBudget` of an associative rule folded over these sources."""
+    return FoldBudget(rule, len(batches), max(len(b) for b in batches),
+                      lambda: coded_fast(model, [b.focal for b in batches]))
 
 
 # -- the direct path: focal elements seen for the first time -------------------------------------------
@@ -335,7 +346,7 @@ def _direct(batches: Sequence[MassBatch], model: Model, purpose: str) -> _Direct
     count = 1
     for b in batches:
         count *= len(b.focal)
-    if count > MAX_TUPLES:
+    if count > limits.MAX_TUPLES:
         return None                     # the plan path refuses it, with its message
     source_model = batches[0].model
     keys = tuple(b.focal_key for b in batches)
@@ -560,12 +571,16 @@ def _prune(batch: MassBatch) -> MassBatch:
                               canonical=batch._canonical)
 
 
-def _fold(batches: Sequence[MassBatch], model: Model, key: str) -> MassBatch:
+def _fold(batches: Sequence[MassBatch], model: Model, key: str, rule: str = "conjunctive") -> MassBatch:
+    """Combine pairwise, left to right, each step checked against the limits of :mod:`belief.plan` first."""
+    budget = _budget(batches, model, rule)
+    budget.step(len(batches[0].focal), len(batches[1].focal), 2)
     result = _tuple_targets_rule(batches[:2], model, key)
     if len(batches) == 2:
         return result
     result = _prune(result)
-    for b in batches[2:]:
+    for number, b in enumerate(batches[2:], start=3):
+        budget.step(len(result.focal), len(b.focal), number)
         result = _prune(_tuple_targets_rule([result, b.under(model) if b.model != model else b], model, key))
     return result
 
@@ -646,6 +661,7 @@ PCR_LOOP_TUPLES = 128
 SINGLE_CACHE_SIZE = 1024
 
 _PAIR_KINDS = frozenset(("meet", "dempster", "join"))
+_JOINT_KINDS = frozenset(("pcr5", "pcr6", "dubois_prade", "dsmh"))
 _SINGLE_TABLES: dict[tuple, tuple] = {}
 _SINGLE_SIGHTINGS: dict[tuple, bool] = {}
 _EMPTY_MESSAGE = ("dempster: total conflict between the sources, m(∅) = 1; "
@@ -707,8 +723,9 @@ def _single(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> M
                 return None
         masks.append(mk)
         count *= len(mk)
-    if count > MAX_TUPLES:
-        return None
+    if kind in _JOINT_KINDS and (count > PCR_LOOP_TUPLES or count > limits.MAX_TUPLES):
+        check_joint(info.name, [len(mk) for mk in masks], 1, "pcr" if kind in ("pcr5", "pcr6") else "targets",
+                    True, kind == "pcr5")
     if source_model.kind != "shafer":
         used = 0
         for mk in masks:
@@ -746,7 +763,7 @@ def _single(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> M
     if kind in ("dubois_prade", "dsmh"):
         out = _single_targets(n, masks, values, kind)
     else:
-        out = _single_fold(n, masks, values, "join" if kind == "join" else "meet")
+        out = _single_fold(n, masks, values, "join" if kind == "join" else "meet", FoldBudget(info.name, len(masks)))
     if out is None:
         return None
     focal, row = out
@@ -990,11 +1007,16 @@ def _single_to_total(model: Model, n: int, focal: list[int], row: np.ndarray) ->
     return [new_focal[i] for i in order], new_values[order]
 
 
-def _single_fold(n: int, masks: list, values: list, key: str) -> tuple[list[int], list | np.ndarray] | None:
+def _single_fold(n: int, masks: list, values: list, key: str,
+                 budget: FoldBudget | None = None) -> tuple[list[int], list | np.ndarray] | None:
     """:func:`_fold` on masks: pairwise, the zero masses of each partial result dropped."""
+    if budget is not None:
+        budget.step(len(masks[0]), len(masks[1]), 2)
     out = _single_targets(n, masks[:2], values[:2], key)
-    for mk, v in zip(masks[2:], values[2:]):
+    for number, (mk, v) in enumerate(zip(masks[2:], values[2:]), start=3):
         focal, row = _single_prune(*out)
+        if budget is not None:
+            budget.step(len(focal), len(mk), number)
         out = _single_targets(n, [tuple(focal), mk], [row, v], key)
     return _single_prune(*out) if len(masks) > 2 else out
 
@@ -1179,7 +1201,7 @@ def _single_pcr_tables(n: int, masks: list, rule: str):
                associative=True, keeps_conflict=True, aliases=("smets", "tbm", "unnormalized"))
 def conjunctive(sources: Sequence[MassBatch], model: Model) -> MassBatch:
     """m(A) = Σ_{X_1∩…∩X_s=A} Π m_i(X_i), with the products of empty intersections on ∅ (W (2))."""
-    return _fold(sources, model, "meet")
+    return _fold(sources, model, "meet", "conjunctive")
 
 
 @register_rule("dsmc", summary="classic DSm rule: conjunctive on D^Θ (no conflict on the free model)",
@@ -1191,7 +1213,7 @@ def dsmc(sources: Sequence[MassBatch], model: Model) -> MassBatch:
     a hybrid model (such as the tracking model of SPEC Part D, where it is the ``table``
     rule) the products that land on an empty intersection stay on ∅.
     """
-    return _fold(sources, model, "meet")
+    return _fold(sources, model, "meet", "dsmc")
 
 
 @register_rule("dempster", summary="Dempster's rule: conjunctive, renormalised by 1 - conflict",
@@ -1202,14 +1224,14 @@ def dempster(sources: Sequence[MassBatch], model: Model) -> MassBatch:
     The denominator is the sum of the non-empty masses rather than 1 - K, so that a
     conflict K close to one still yields masses that sum to one.
     """
-    return _move_empty(_fold(sources, model, "meet"), None, model, "dempster")
+    return _move_empty(_fold(sources, model, "meet", "dempster"), None, model, "dempster")
 
 
 @register_rule("disjunctive", summary="disjunctive rule: products go to the union of the focal elements",
                associative=True, keeps_conflict=True, aliases=("union",))
 def disjunctive(sources: Sequence[MassBatch], model: Model) -> MassBatch:
     """m(A) = Σ_{X_1∪…∪X_s=A} Π m_i(X_i) (Dubois & Prade 1986; Smets 1993)."""
-    return _fold(sources, model, "join")
+    return _fold(sources, model, "join", "disjunctive")
 
 
 @register_rule("yager", summary="Yager's rule: the conflict goes to total ignorance",
@@ -1217,7 +1239,7 @@ def disjunctive(sources: Sequence[MassBatch], model: Model) -> MassBatch:
 def yager(sources: Sequence[MassBatch], model: Model) -> MassBatch:
     """m(A) = m∩(A) for ∅ ≠ A ≠ Θ and m(Θ) = m∩(Θ) + m∩(∅) (Yager 1987)."""
     _require_normal(sources, "yager")
-    return _move_empty(_fold(sources, model, "meet"), model.total, model, "yager")
+    return _move_empty(_fold(sources, model, "meet", "yager"), model.total, model, "yager")
 
 
 @register_rule("dubois_prade", summary="Dubois–Prade: each conflicting product goes to the union of its elements",
@@ -1229,6 +1251,7 @@ def dubois_prade(sources: Sequence[MassBatch], model: Model) -> MassBatch:
     element to go to; as the formula says, it stays on ∅ (DSmH places it instead).
     """
     _require_normal(sources, "dubois_prade")
+    _check_joint(sources, model, "dubois_prade", "targets")
     return _tuple_targets_rule(sources, model, "dubois_prade")
 
 
@@ -1244,12 +1267,14 @@ def dsmh(sources: Sequence[MassBatch], model: Model) -> MassBatch:
     (Smarandache & Dezert, Advances and Applications of DSmT, vol. 1, ch. 4).
     """
     _require_normal(sources, "dsmh")
+    _check_joint(sources, model, "dsmh", "targets")
     return _tuple_targets_rule(sources, model, "dsmh")
 
 
 def _pcr(sources: Sequence[MassBatch], model: Model, rule: str) -> MassBatch:
     """Consensus (the conjunctive rule without ∅) plus the redistribution of every conflicting tuple."""
     _require_normal(sources, rule)
+    _check_joint(sources, model, rule, "pcr")
     direct = _direct(sources, model, "pcr")
     if direct is not None:
         _require_nonempty([b.focal for b in sources], direct.projected, model, rule)
@@ -1259,7 +1284,7 @@ def _pcr(sources: Sequence[MassBatch], model: Model, rule: str) -> MassBatch:
         else:
             elements, shares = _pcr_shares(sources, _array_pcr_tables(direct, rule))
         return _add(model, consensus, elements, shares)
-    plan = _plan(sources, model)
+    plan = _plan(sources, model, rule)
     _require_nonempty(plan.focal, plan.projected, model, rule)
     consensus = _fold(sources, model, "meet")
     elements, shares = _pcr_shares(sources, _pcr_kernel(plan, rule))
@@ -1503,8 +1528,11 @@ def r_rule(sources: Sequence[MassBatch], model: Model, r_mode: str = "paper", em
         _require_kept(b, model, "r_rule", k)
     # Read every source under the fusion model first, so that elements it identifies are merged.
     mapped = [b if b.model == model else b.under(model) for b in sources]
+    budget = FoldBudget("r_rule", len(mapped), max(len(b) for b in mapped), False,
+                        "the R-weighted rule sorts its pairs in Python")
     result = mapped[0]
-    for b in mapped[1:]:
+    for number, b in enumerate(mapped[1:], start=2):
+        budget.step(len(result.focal), len(b.focal), number)
         result = _r_pair(result, b, model, r_mode, empty_mode)
     return result
 

@@ -34,6 +34,7 @@ import belief.plan as plan_module
 import belief.rules as rules
 from belief import (
     BeliefError,
+    CombinationTooLargeError,
     Element,
     Frame,
     InvalidMassError,
@@ -391,10 +392,10 @@ def test_an_element_that_vanishes_under_the_fusion_model_is_refused_on_every_pat
 
 
 def test_too_many_tuples_are_refused_on_every_path(monkeypatch):
-    monkeypatch.setattr(rules, "MAX_TUPLES", 9)
+    monkeypatch.setattr(plan_module, "MAX_TUPLES", 9)
     shafer = Model.shafer(Frame(["a", "b", "c"]))
     m = MassFunction({"a": 0.5, "b": 0.3, "c": 0.2}, model=shafer)
-    assert_same_error([m, m, m], "pcr6", InvalidMassError, "27 tuples")
+    assert_same_error([m, m, m], "pcr6", CombinationTooLargeError, "27 tuples")
     for name in ALL_PATHS:
         with path(name):
             assert combine(m, m, rule="pcr6").isclose(combine(m, m, rule="pcr5"))   # 9 tuples: at the limit
