@@ -67,6 +67,7 @@ from belief.batch import MassBatch, check_select, measure_plan
 from belief.errors import InvalidMassError, ModelError, TotalConflictError
 from belief.frame import Element
 from belief.model import Model
+from belief.plan import check_joint
 
 __all__ = ["ENGINES", "ClosedFormBatch", "ExclusiveSplit", "exclusive_split", "closed_form_rules",
            "ConjunctiveFusion", "PCRFusion", "RRuleFusion"]
@@ -269,6 +270,9 @@ def _build_plan(rule: str, batches: Sequence[MassBatch], model: Model, options: 
     if rule in _PCR and s > 2 and len(split.exclusive) > 1:
         return None, (f"{rule} of {s} sources has a closed form only with at most one exclusive hypothesis; "
                       f"this model has {len(split.exclusive)}")
+    if rule in _PCR and s > 2:
+        # The grids of the closed form hold up to n^s tuples per row, as the general path does.
+        check_joint(rule, [split.size] * s, rows, "pcr", True, rule == "pcr5")
     if rule == "r_rule":
         if len(split.exclusive) > 1:
             return None, (f"r_rule has a closed form only with at most one exclusive hypothesis; this model has "

@@ -59,11 +59,13 @@ class LatticeTooLargeError(ResourceLimitError):
     """Enumerating the hyper-power set (or a graph of it) would not fit in memory or time."""
 
 
-class CombinationTooLargeError(ResourceLimitError):
+class CombinationTooLargeError(ResourceLimitError, InvalidMassError):
     """A combination would visit too many tuples of focal elements, or need too much time or memory.
 
     The message names the limit of :mod:`belief.plan` that the job exceeds (``MAX_TUPLES``,
-    ``MAX_WORK``, ``MAX_BYTES`` or ``MAX_ELEMENT_TUPLES``) and its estimate of the job.
+    ``MAX_WORK``, ``MAX_BYTES`` or ``MAX_ELEMENT_TUPLES``) and its estimate of the job.  It is
+    also an :class:`InvalidMassError`, which such refusals used to be, so that code catching
+    that keeps working.
     """
 
 

@@ -30,9 +30,10 @@ import numpy as np
 
 from belief import representations as rep
 from belief.batch import MassBatch
-from belief.errors import InvalidMassError, ModelError
+from belief.errors import CombinationTooLargeError, InvalidMassError, ModelError
 from belief.frame import Element
 from belief.model import Model
+from belief.plan import check_joint
 from belief.rules import combine, register_rule
 
 __all__ = ["cautious", "bold", "average", "murphy", "pcr5_plus", "pcr6_plus", "keeping_index", "MAX_PLUS_TUPLES"]
@@ -370,8 +371,11 @@ def _pcr_plus(sources: Sequence[MassBatch], model: Model, rule: str) -> MassBatc
     for f in focal:
         count *= len(f)
     if count > MAX_PLUS_TUPLES:
-        raise InvalidMassError(f"joint {rule} combination of {len(sources)} sources visits {count:,} tuples of focal "
-                               f"elements, more than {MAX_PLUS_TUPLES:,}; use fewer focal elements or sources")
+        raise CombinationTooLargeError(
+            f"joint {rule} combination of {len(sources)} sources visits {count:,} tuples of focal elements, more than "
+            f"belief.extra_rules.MAX_PLUS_TUPLES = {MAX_PLUS_TUPLES:,}; use fewer focal elements or sources, or raise "
+            "belief.extra_rules.MAX_PLUS_TUPLES")
+    check_joint(rule, [len(f) for f in focal], rows, "pcr", True, rule == "pcr5_plus")
     plan = _plus_plan(model, tuple(focal))
     out = np.empty((rows, len(plan.targets)))
     width = len(plan.order) + len(plan.entry_tuple) * 2 + len(plan.entry_starts) * (len(sources) + 2)
