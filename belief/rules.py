@@ -240,7 +240,7 @@ def combine(*sources: Source, rule: Union[str, RuleInfo] = "dempster", model: Mo
         if not options:
             fused = _single(info, sources, model)
             if fused is not None:
-                return fused
+                return _renormalised(fused)
     else:
         bayesian.check_engine(engine)
     unknown = set(options) - set(info.options)
@@ -251,14 +251,53 @@ def combine(*sources: Source, rule: Union[str, RuleInfo] = "dempster", model: Mo
     if engine != "general" and not (single and engine == "auto"):
         if info.name == "r_rule":
             _check_r_options(**options)
-        fused, reason = bayesian.closed_form(info.name, batches, fusion_model, options, info.function)
+        fused, reason = bayesian.closed_form(info.name, batches, fusion_model, options,
+                                             lambda *args, **kwargs: _renormalised(info.function(*args, **kwargs)))
         if fused is None:
             if engine == "bayesian":
                 raise bayesian.not_applicable(reason)
         elif not single:
             return fused
-    result = info.function(batches, fusion_model, **options)
+    result = _renormalised(info.function(batches, fusion_model, **options))
     return result[0] if single else result
+
+
+#: A result whose masses sum to one within this is left as it is; others are rescaled to sum to one.
+RESULT_TOLERANCE = 1e-13
+
+
+def _renormalised(result: Source) -> Source:
+    """The result with every row rescaled to sum to one where it is off by more than :data:`RESULT_TOLERANCE`.
+
+    Sources are accepted when they sum to one within
+    :data:`~belief.batch.SUM_TOLERANCE`, and the masses of a combination sum to the
+    product of the sources' sums: left alone, the error would compound over repeated
+    combinations until a result is no longer a valid input.  Rows within the tolerance
+    are returned bit for bit.
+    """
+    if type(result) is MassFunction:
+        floats = result._floats
+        if floats is not None:
+            total = fsum(floats)
+            if abs(total - 1.0) <= RESULT_TOLERANCE:
+                return result
+            if result._masks is not None:
+                return MassFunction._from_masks(result.model, result._masks, tuple([x / total for x in floats]),
+                                                result._loose)
+        else:
+            total = fsum(result.values.tolist())
+            if abs(total - 1.0) <= RESULT_TOLERANCE:
+                return result
+            if result._masks is not None:
+                return MassFunction._from_masks(result.model, result._masks, result.values / total)
+        return _renormalised(result.batch())[0]
+    values = result.values
+    totals = values.sum(axis=1)
+    off = np.abs(totals - 1.0) > RESULT_TOLERANCE
+    if not off.any():
+        return result
+    scale = np.where(off, totals, 1.0)
+    return MassBatch._trusted(result.model, result.focal, values / scale[:, None], canonical=result._canonical)
 
 
 def sequential(*sources: Source, rule: Union[str, RuleInfo] = "pcr6", model: Model | None = None,
