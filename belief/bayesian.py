@@ -300,6 +300,13 @@ def _build_plan(rule: str, batches: Sequence[MassBatch], model: Model, options: 
 
 # -- shared pieces ------------------------------------------------------------------------------------
 _TINY = np.finfo(np.float64).smallest_subnormal
+#: Dempster's rule below this non-empty mass goes the general way, which rescales its products
+#: (belief.rules.WIDE_SCALE).  Above it, what underflowed is below 2^-474 of every result.
+_WIDE_SCALE = 2.0 ** -600
+
+
+class _Underflow(Exception):
+    """The closed form of Dempster's rule would divide by a non-empty mass that may have underflowed."""
 
 #: Pair weights above this have a finite 1 / (x_i + x_l) whose products with masses stay finite.
 _RECIPROCAL_FLOOR = 1e-150
@@ -326,16 +333,6 @@ def _product(arrays: Sequence[np.ndarray]) -> np.ndarray:
     for a in arrays[1:]:
         out = out * a
     return out if len(arrays) > 1 else out.copy()
-
-
-def _dead_rows(rule: str, scale: np.ndarray) -> None:
-    """Dempster's rule is undefined where nothing but ∅ holds mass (as :func:`belief.rules.dempster`)."""
-    dead = ~(scale > 0)
-    if dead.any():
-        row = int(np.flatnonzero(dead)[0])
-        where = f" (row {row})" if scale.size > 1 else ""
-        raise TotalConflictError(f"{rule}: total conflict between the sources{where}, m(∅) = 1; "
-                                 "Dempster's rule is undefined (try yager, dubois_prade, dsmh or pcr6)")
 
 
 class _Fusion:
@@ -514,8 +511,8 @@ class ConjunctiveFusion(_Fusion):
             self.conflict[rows] = _conflict(excl, totals, [None if z is None else z[rows] for z in empties])
         self.all_free = _product(list(self.totals))                # P_O = Π_i O_i
         self.scale = self.all_free + self.exclusive.sum(axis=0)    # Σ of the non-empty masses
-        if rule == "dempster":
-            _dead_rows("dempster", self.scale)
+        if rule == "dempster" and not (self.scale > _WIDE_SCALE).all():
+            raise _Underflow       # total conflict, or products that underflowed: the general path tells which
         self._cache: dict = {}
 
     def empty(self) -> np.ndarray:
@@ -1766,7 +1763,12 @@ def closed_form(rule: str, batches: Sequence[MassBatch], model: Model, options: 
     build, reason = _build_plan(rule, batches, model, options)
     if build is None:
         return None, reason
-    fusion = build()
+    try:
+        fusion = build()
+    except _Underflow:
+        function(list(batches), model, **options)          # raises TotalConflictError where K = 1 exactly
+        return None, ("Dempster's normalisation divides by a non-empty mass below 2^-600, which the closed forms "
+                      "cannot keep from underflowing")
 
     def materialise() -> MassBatch:
         return function(list(batches), model, **options)

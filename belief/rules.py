@@ -673,12 +673,8 @@ def _move_empty(result: MassBatch, to: Element | None, model: Model, rule: str) 
     if to is None:
         kept = values[:, 1:] if k == 0 else np.delete(values, k, axis=1)
         scale = kept.sum(axis=1)
-        dead = ~(scale > 0)
-        if dead.any():
-            row = int(np.flatnonzero(dead)[0])
-            where = f" (row {row})" if len(values) > 1 else ""
-            raise TotalConflictError(f"{rule}: total conflict between the sources{where}, m(∅) = 1; "
-                                     "Dempster's rule is undefined (try yager, dubois_prade, dsmh or pcr6)")
+        if not (scale > WIDE_SCALE).all():
+            return None                         # the non-empty mass may have underflowed: see _wide_dempster
         return MassBatch._trusted(model, focal[:k] + focal[k + 1:], kept / scale[:, None], canonical=result._canonical)
     new_focal = list(focal[:k] + focal[k + 1:])
     new_values = np.delete(values, k, axis=1)
@@ -703,8 +699,6 @@ _PAIR_KINDS = frozenset(("meet", "dempster", "join"))
 _JOINT_KINDS = frozenset(("pcr5", "pcr6", "dubois_prade", "dsmh"))
 _SINGLE_TABLES: dict[tuple, tuple] = {}
 _SINGLE_SIGHTINGS: dict[tuple, bool] = {}
-_EMPTY_MESSAGE = ("dempster: total conflict between the sources, m(∅) = 1; "
-                  "Dempster's rule is undefined (try yager, dubois_prade, dsmh or pcr6)")
 
 
 def _single(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> MassFunction | None:
@@ -716,8 +710,9 @@ def _single(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> M
     (the result's are made when it is read).  It takes Shafer's model, or any model that
     forbids every pair of the hypotheses in use, frames of up to
     :data:`~belief.plan.RANK_TABLE_WIDTH` hypotheses, the sources' own model for the fusion,
-    and the built-in rules of :data:`_SINGLE_RULES`; anything else, and every error but
-    Dempster's total conflict, goes the general way (None).  Each step adds the same
+    and the built-in rules of :data:`_SINGLE_RULES`; anything else, every error, and
+    Dempster's rule with a non-empty mass below :data:`WIDE_SCALE` (total conflict, or
+    products that may have underflowed) go the general way (None).  Each step adds the same
     products in the same order as the plan of :mod:`belief.plan`, so the results are the
     same to the last bit.
     """
@@ -812,14 +807,14 @@ def _single(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> M
             if type(row) is list:
                 kept = row[1:]
                 scale = _pairwise(kept, 0, len(kept))
-                if not scale > 0:
-                    raise TotalConflictError(_EMPTY_MESSAGE)
+                if not scale > WIDE_SCALE:
+                    return None                 # underflow or total conflict: the general path tells which
                 focal, row = focal[1:], [x / scale for x in kept]
             else:
                 kept = row[1:]
                 scale = kept.sum()
-                if not scale > 0:
-                    raise TotalConflictError(_EMPTY_MESSAGE)
+                if not scale > WIDE_SCALE:
+                    return None
                 focal, row = focal[1:], kept / scale
         elif kind == "yager":
             focal, row = _single_to_total(source_model, n, focal, np.asarray(row))
@@ -837,7 +832,7 @@ def _single(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> M
 
 
 def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[float, ...], masks2: tuple[int, ...],
-               values2: tuple[float, ...], owner: MassFunction | None = None) -> MassFunction:
+               values2: tuple[float, ...], owner: MassFunction | None = None) -> MassFunction | None:
     """Two mass functions, a few tuples, a rule of the ∩ or ∪ kind: :func:`_single` in one Python function.
 
     The products that reach one element are added by ``math.fsum``, and Dempster's
@@ -892,8 +887,8 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
             for group in groups.values()]
     if normalise:
         scale = fsum(sums)
-        if not scale > 0:
-            raise TotalConflictError(_EMPTY_MESSAGE)
+        if not scale > WIDE_SCALE:
+            return None                         # underflow or total conflict: the general path tells which
         sums = [x / scale for x in sums]
     # Masses are positive: if the product of the smallest two is, so is every product, every sum
     # and every quotient by a scale of at most one (rounding is monotone), and no zero is dropped.
@@ -917,7 +912,7 @@ def _pair_table(masks1, masks2, key: str) -> tuple:
     return focal, rows, columns, sizes, empty
 
 
-def _pair_from_table(model: Model, kind: str, table: tuple, values1, values2) -> MassFunction:
+def _pair_from_table(model: Model, kind: str, table: tuple, values1, values2) -> MassFunction | None:
     """:func:`_pair_loop` on the grouping of :func:`_pair_table`: the same sums."""
     focal, rows, columns, sizes, empty = table
     products = [values1[i] * values2[j] for i, j in zip(rows, columns)]
@@ -935,8 +930,8 @@ def _pair_from_table(model: Model, kind: str, table: tuple, values1, values2) ->
     if kind == "dempster" and empty is not None:
         del focal[empty], sums[empty]
         scale = fsum(sums)
-        if not scale > 0:
-            raise TotalConflictError(_EMPTY_MESSAGE)
+        if not scale > WIDE_SCALE:
+            return None                         # underflow or total conflict: the general path tells which
         sums = [x / scale for x in sums]
     if not min(values1) * min(values2) > 0 and not all(x > 0 for x in sums):
         pairs = [(f, x) for f, x in zip(focal, sums) if x > 0]
@@ -1263,7 +1258,67 @@ def dempster(sources: Sequence[MassBatch], model: Model) -> MassBatch:
     The denominator is the sum of the non-empty masses rather than 1 - K, so that a
     conflict K close to one still yields masses that sum to one.
     """
-    return _move_empty(_fold(sources, model, "meet", "dempster"), None, model, "dempster")
+    result = _move_empty(_fold(sources, model, "meet", "dempster"), None, model, "dempster")
+    return result if result is not None else _wide_dempster(sources, model)
+
+
+#: Dempster's rule normalises by the non-empty mass; below this, products that underflowed may matter,
+#: and the combination is made again with exponents kept apart (:func:`_wide_dempster`).
+WIDE_SCALE = 2.0 ** -40
+#: The exponent of a zero mass in :func:`_wide_dempster`: below any sum of real exponents.
+_ZERO_EXPONENT = -(1 << 40)
+
+
+def _split(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Masses as mantissas in [½, 1) and int64 exponents (zeros get :data:`_ZERO_EXPONENT`)."""
+    mantissas, exponents = np.frexp(values)
+    exponents = exponents.astype(np.int64)
+    exponents[mantissas == 0] = _ZERO_EXPONENT
+    return mantissas, exponents
+
+
+def _wide_dempster(sources: Sequence[MassBatch], model: Model) -> MassBatch:
+    """Dempster's rule where the non-empty mass is tiny: products kept as mantissa × 2^exponent, never underflowing.
+
+    Each pairwise step multiplies mantissas and adds exponents, drops the products that
+    reach ∅, and sums each target's products scaled to the largest of them, so that a sum
+    loses only what is below 2^-1074 of itself.  The final rows are scaled to their
+    largest mass and normalised.  Total conflict is reported only when every product
+    that reaches a non-empty element has a zero factor, that is when K = 1 exactly.
+    """
+    n, values = _values(sources)
+    parts = [_split(v) for v in values]
+    mantissas, exponents = parts[0]
+    focal = sources[0].focal
+    source_model = sources[0].model
+    for b, (m2, e2) in zip(sources[1:], parts[1:]):
+        if b.model != model:
+            b = b.under(model)
+            m2, e2 = _split(b.values if len(b) == n else np.broadcast_to(b.values, (n, len(b.focal))))
+        plan = tuple_plan(source_model, model, (tuple(focal), b.focal))
+        scatter, (c1, c2) = _kernel(plan, "meet")
+        product = mantissas.take(c1, axis=1) * m2.take(c2, axis=1)        # in [¼, 1): no underflow
+        exponent = exponents.take(c1, axis=1) + e2.take(c2, axis=1)
+        top = np.maximum.reduceat(exponent, scatter.starts, axis=1)
+        runs = np.diff(np.append(scatter.starts, exponent.shape[1]))
+        shift = np.maximum(exponent - np.repeat(top, runs, axis=1), -1100)
+        sums = np.add.reduceat(np.ldexp(product, shift.astype(np.int32)), scatter.starts, axis=1)
+        mantissas, exponents = _split(sums)
+        exponents = np.where(mantissas == 0, _ZERO_EXPONENT, exponents + top)
+        keep = [i for i, e in enumerate(scatter.elements) if e.terms]
+        focal = tuple(scatter.elements[i] for i in keep)
+        mantissas, exponents = mantissas[:, keep], exponents[:, keep]
+        source_model = model
+    top = exponents.max(axis=1, initial=_ZERO_EXPONENT)
+    dead = top <= _ZERO_EXPONENT // 2
+    if dead.any():
+        row = int(np.flatnonzero(dead)[0])
+        where = f" (row {row})" if n > 1 else ""
+        raise TotalConflictError(f"dempster: total conflict between the sources{where}, m(∅) = 1; "
+                                 "Dempster's rule is undefined (try yager, dubois_prade, dsmh or pcr6)")
+    scaled = np.ldexp(mantissas, np.maximum(exponents - top[:, None], -1100).astype(np.int32))
+    out = scaled / scaled.sum(axis=1)[:, None]
+    return _prune(MassBatch._trusted(model, focal, out, canonical=True))
 
 
 @register_rule("disjunctive", summary="disjunctive rule: products go to the union of the focal elements",

@@ -179,11 +179,16 @@ def check(model, rule, options, arrays, broadcast, rng, shuffle=False):
     general, error = outcome(lambda: combine(*batches, rule=rule, engine="general", **options))
     fast, fast_error = outcome(lambda: combine(*batches, rule=rule, **options))
     assert fast_error == error
+    # Dempster's rule on a non-empty mass below 2^-600 goes the general way, which rescales
+    # the products that underflow; engine="bayesian" then declines.
+    weak = (rule == "dempster" and error is None
+            and not (1.0 - combine(*batches, rule="conjunctive", engine="general").empty_mass > 2.0 ** -600).all())
     if covered(rule, options, model, len(arrays)):
         if error is None:
-            assert isinstance(fast, ClosedFormBatch)
+            assert isinstance(fast, ClosedFormBatch) or weak
         bayesian_error = outcome(lambda: combine(*batches, rule=rule, engine="bayesian", **options))[1]
-        assert bayesian_error == error
+        assert bayesian_error == error or (weak and bayesian_error[0] is ModelError
+                                           and "underflowing" in bayesian_error[1])
     else:
         assert error is not None or type(fast) is MassBatch
     if error is None:
