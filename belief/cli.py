@@ -22,10 +22,10 @@ from typing import Any
 
 from belief.errors import BeliefError, FormatError
 from belief.frame import Frame
-from belief.lattice import hyper_power_set
-from belief.mass import MassFunction
+from belief.lattice import check_lattice_size, hyper_power_set
+from belief.mass import MassFunction, check_cardinality_range
 from belief.model import Model
-from belief.textfiles import read_text
+from belief.textfiles import load_json, read_text
 
 __all__ = ["main", "build_parser", "ENTRY_POINT_GROUP"]
 
@@ -43,17 +43,21 @@ class _Parser(argparse.ArgumentParser):
 
 # -- helpers ------------------------------------------------------------------------------------
 def _read_json(path: str, what: str) -> Any:
-    text = read_text(path, what)
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise FormatError(f"{what} {path!r} is not valid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}") from None
+    return load_json(read_text(path, what), f"{what} {path!r}")
 
 
 def _read_bba(path: str) -> MassFunction:
     data = _read_json(path, "BBA file")
     try:
         return MassFunction.from_dict(data)
+    except BeliefError as exc:
+        raise type(exc)(f"{path}: {exc}") from None
+
+
+def _model_from(path: str, frame: Frame, data: Any) -> Model:
+    """The model of a model file's JSON ``data``; an error names the file."""
+    try:
+        return Model.from_dict(frame, data)
     except BeliefError as exc:
         raise type(exc)(f"{path}: {exc}") from None
 
@@ -91,34 +95,47 @@ def _fmt(value: Any) -> str:
 def _cmd_lattice(args: argparse.Namespace) -> int:
     if args.frame is not None and args.n is not None:
         raise CommandError("belief lattice: error: give either N or --frame, not both")
+    data = _read_json(args.model, "model file") if args.model else None
     if args.frame is not None:
         frame = Frame.parse(args.frame)
     elif args.n is not None:
         if args.n < 1:
             raise CommandError(f"belief lattice: error: N must be a positive number of hypotheses, got {args.n}")
+        # Refused before the frame of N names is made: N can be far beyond memory.
+        check_lattice_size(args.n, data)
         frame = Frame.numbered(args.n)
     else:
         raise CommandError("belief lattice: error: give the number of hypotheses N or --frame a,b,c")
-    model = Model.from_dict(frame, _read_json(args.model, "model file")) if args.model else Model.free(frame)
+    model = _model_from(args.model, frame, data) if args.model else Model.free(frame)
     lattice = hyper_power_set(model)
     if args.json:
-        data: dict[str, Any] = {"frame": list(frame.hypotheses), "count": len(lattice)}
-        if not args.count:
-            data["elements"] = list(lattice.strings())
-        _print_json(data)
+        _print_lattice_json(lattice, with_elements=not args.count)
     elif args.count:
         print(len(lattice))
     else:
         out = sys.stdout
-        chunk: list[str] = []
-        for text in lattice.strings():
-            chunk.append(text)
-            if len(chunk) >= 65536:
-                out.write("\n".join(chunk) + "\n")
-                chunk = []
-        if chunk:
-            out.write("\n".join(chunk) + "\n")
+        for block in lattice.string_blocks():
+            out.write("\n".join(block) + "\n")
     return 0
+
+
+def _print_lattice_json(lattice, with_elements: bool) -> None:
+    """The lattice as ``json.dumps(..., indent=2)`` would print it, written as the elements are made.
+
+    Millions of elements would otherwise be held three times over: as strings, in a list,
+    and in one JSON text.
+    """
+    head = json.dumps({"frame": list(lattice.frame.hypotheses), "count": len(lattice)}, indent=2, ensure_ascii=False)
+    out = sys.stdout
+    if not with_elements:
+        out.write(head + "\n")
+        return
+    out.write(head[:-2] + ',\n  "elements": [')
+    first = True
+    for block in lattice.string_blocks(json_escaped=True):
+        out.write(("\n" if first else ",\n") + '    "' + '",\n    "'.join(block) + '"')
+        first = False
+    out.write("\n  ]\n}\n")
 
 
 # -- measures ---------------------------------------------------------------------------------------
@@ -133,6 +150,7 @@ def _queries(m: MassFunction, given: Sequence[str] | None) -> list[str]:
 def _cmd_measures(args: argparse.Namespace) -> int:
     m = _read_bba(args.bba)
     queries = _queries(m, args.query)
+    check_cardinality_range(m, "BetP")
     batch = m.batch()
     columns = {name: getattr(batch, name)(queries)[0].tolist() for name in ("bel", "pls", "q", "betp")}
     if args.json:
@@ -179,11 +197,12 @@ def _cmd_transform(args: argparse.Namespace) -> int:
         names = list(m.frame.hypotheses)
         extra = [q for q in _queries(m, args.query) if q not in names] if args.query else []
         queries = names + extra
-        batch = m.batch()
         if args.pignistic:
-            values = batch.betp(queries)[0].tolist()
+            check_cardinality_range(m, "BetP")
+            values = m.batch().betp(queries)[0].tolist()
         else:
-            values = batch.dsmp(queries, epsilon=args.dsmp)[0].tolist()
+            check_cardinality_range(m, "DSmP", args.dsmp)
+            values = m.batch().dsmp(queries, epsilon=args.dsmp)[0].tolist()
         probability = dict(zip(queries, values))
         if args.json:
             _print_json({"probability": probability})
@@ -213,7 +232,7 @@ def _cmd_combine(args: argparse.Namespace) -> int:
     sources = [_read_bba(path) for path in args.bba]
     model = None
     if args.model:
-        model = Model.from_dict(sources[0].frame, _read_json(args.model, "model file"))
+        model = _model_from(args.model, sources[0].frame, _read_json(args.model, "model file"))
     options = {}
     if args.r_mode is not None:
         options["r_mode"] = args.r_mode
@@ -248,6 +267,9 @@ def _cmd_decide(args: argparse.Namespace) -> int:
     options = {} if args.epsilon is None else {"epsilon": args.epsilon}
     if args.epsilon is not None and args.criterion != "dsmp":
         raise CommandError("belief decide: error: --epsilon goes with --criterion dsmp")
+    if args.criterion in ("betp", "dsmp"):
+        check_cardinality_range(m, args.criterion.replace("betp", "BetP").replace("dsmp", "DSmP"),
+                                (0.001 if args.epsilon is None else args.epsilon) if args.criterion == "dsmp" else None)
     decision = decide(m, args.criterion, args.candidates or None, tol=args.tolerance, **options)
     if args.json:
         _print_json({"decision": list(decision.elements), "value": decision.value})

@@ -19,13 +19,18 @@ canonical form under constraints.
 from __future__ import annotations
 
 import re
+import unicodedata
 from collections.abc import Iterable, Iterator, Sequence
 from functools import lru_cache
 from typing import Union
 
 from belief.errors import FrameError, ParseError, UnknownHypothesisError
 
-__all__ = ["Frame", "Element", "reduce_terms", "term_key"]
+__all__ = ["Frame", "Element", "reduce_terms", "term_key", "MAX_PROPOSITION_TERMS"]
+
+#: A proposition whose normal form would have more conjunctions than this is refused by the parser:
+#: the normal form of an intersection of unions grows as the product of their sizes.
+MAX_PROPOSITION_TERMS = 1_000_000
 
 _OPERATOR_CHARS = set("()&|∩∪∅,")
 _RESERVED_NAMES = {"empty", "∅"}
@@ -75,14 +80,55 @@ def reduce_terms(terms: Iterable[int]) -> tuple[int, ...]:
     if not unique:
         return ()
     smallest = unique[0].bit_count()
-    kept: list[int] = []
-    for term in unique:
-        # Terms of the smallest size cannot absorb one another.
-        if term.bit_count() == smallest or not any(k & ~term == 0 for k in kept):
-            kept.append(term)
+    if len(unique) > 64 and unique[-1].bit_count() != smallest:
+        kept = _reduce_many(unique, smallest)
+    else:
+        kept = []
+        for term in unique:
+            # Terms of the smallest size cannot absorb one another.
+            if term.bit_count() == smallest or not any(k & ~term == 0 for k in kept):
+                kept.append(term)
     if len(kept) > 1:
         kept.sort(key=term_key)
     return tuple(kept)
+
+
+def _reduce_many(unique: list[int], smallest: int) -> list[int]:
+    """The absorption of :func:`reduce_terms` for many terms, sorted by size.
+
+    A kept term can only absorb a term that holds its lowest hypothesis, so the kept terms
+    are filed under that hypothesis and a term is compared with those filed under its own
+    hypotheses only: a union of n hypotheses and their pairs costs about n, not n².
+    """
+    kept: list[int] = []
+    filed: dict[int, list[int]] = {}
+    for term in unique:
+        if term.bit_count() != smallest:
+            absorbed = False
+            if term.bit_count() < len(filed):
+                m = term
+                while m and not absorbed:
+                    low = m & -m
+                    m ^= low
+                    for k in filed.get(low, ()):
+                        if k & ~term == 0:
+                            absorbed = True
+                            break
+            else:
+                for low, group in filed.items():
+                    if low & term and any(k & ~term == 0 for k in group):
+                        absorbed = True
+                        break
+            if absorbed:
+                continue
+        kept.append(term)
+        low = term & -term
+        group = filed.get(low)
+        if group is None:
+            filed[low] = [term]
+        else:
+            group.append(term)
+    return kept
 
 
 class Frame:
@@ -117,11 +163,23 @@ class Frame:
         if not names:
             raise FrameError("a frame needs at least one hypothesis")
         seen: set[str] = set()
+        composed: dict[str, str] | None = None
         for name in names:
             _check_name(name)
             if name in seen:
                 raise FrameError(f"hypothesis {name!r} appears twice in the frame")
             seen.add(name)
+            if not name.isascii():
+                # Two spellings of one text (composed é and e + combining accent) print alike.
+                if composed is None:
+                    composed = {}
+                key = unicodedata.normalize("NFC", name)
+                other = composed.setdefault(key, name)
+                if other != name:
+                    raise FrameError(
+                        f"hypotheses {other!r} and {name!r} differ only in their Unicode normalisation "
+                        f"({_escaped(other)} and {_escaped(name)}) and would print alike"
+                    )
         self._names = names
         self._index = {name: i for i, name in enumerate(names)}
         self._bit = {name: 1 << i for i, name in enumerate(names)}
@@ -183,7 +241,7 @@ class Frame:
             return self._index[name]
         except KeyError:
             raise UnknownHypothesisError(
-                f"unknown hypothesis {name!r}; the frame has {', '.join(self._names)}"
+                f"unknown hypothesis {name!r}; the frame has {_listing(self._names)}"
             ) from None
 
     def __getitem__(self, name: str) -> "Element":
@@ -310,6 +368,33 @@ def _check_name(name: object) -> None:
     bad = sorted({ch for ch in name if ch.isspace() or ch in _OPERATOR_CHARS})
     if bad:
         raise FrameError(f"hypothesis name {name!r} contains the reserved character(s) {''.join(bad)!r}")
+    if not name.isprintable():
+        # Control, format (zero-width), private-use and unassigned characters and lone
+        # surrogates make names that look alike, or that cannot be printed at all.
+        ch = next(ch for ch in name if not ch.isprintable())
+        raise FrameError(
+            f"hypothesis name {name!r} contains the invisible or unprintable character "
+            f"{_codepoint(ch)} ({_category_name(ch)}); hypothesis names must be printable"
+        )
+
+
+def _codepoint(ch: str) -> str:
+    code = ord(ch)
+    return f"\\u{code:04x}" if code <= 0xFFFF else f"\\U{code:08x}"
+
+
+def _escaped(name: str) -> str:
+    """A name quoted with every non-printable or non-ASCII character as an escape."""
+    return "'" + "".join(ch if ch.isascii() and ch.isprintable() else _codepoint(ch) for ch in name) + "'"
+
+
+_CATEGORIES = {"Cc": "control character", "Cf": "format character", "Cs": "lone surrogate",
+               "Co": "private-use character", "Cn": "unassigned code point"}
+
+
+def _category_name(ch: str) -> str:
+    category = unicodedata.category(ch)
+    return _CATEGORIES.get(category, f"Unicode category {category}")
 
 
 def _bits(mask: int) -> Iterator[int]:
@@ -399,6 +484,9 @@ class Element(_ElementSlots):
 
     def __and__(self, other: Union["Element", str]) -> "Element":
         other = self._other(other)
+        if self.terms == other.terms:
+            # X ∩ X = X, without the |X|² products (measures meet each focal element with itself).
+            return self
         return _make(self.frame, reduce_terms(a | b for a in self.terms for b in other.terms))
 
     def __or__(self, other: Union["Element", str]) -> "Element":
@@ -526,77 +614,114 @@ _TOKEN = re.compile(r"\s*(?:(?P<op>[()&|∩∪∅])|(?P<name>[^\s()&|∩∪∅]+
 
 
 class _Parser:
-    """Recursive-descent parser: union := inter ('|' inter)*; inter := atom ('&' atom)*."""
+    """Parser of union := inter ('|' inter)*; inter := atom ('&' atom)*; atom := name | empty | '(' union ')'.
+
+    It reads the tokens in one pass with an explicit stack of open parentheses, so that
+    deep nesting costs no recursion, and it collects the conjunctions of a union in a list
+    reduced once when the union closes, so that a union of n hypotheses costs n log n
+    rather than n reductions of a growing antichain.
+    """
 
     def __init__(self, frame: Frame, text: str) -> None:
         self.frame = frame
         self.text = text
-        self.tokens: list[tuple[str, str, int]] = []
+
+    def _fail(self, message: str, where: int) -> None:
+        raise ParseError(f"malformed proposition {_shorten(self.text)!r}: {message} at position {where}")
+
+    def _tokens(self) -> Iterator[tuple[str, str, int]]:
+        text = self.text
         pos = 0
         stripped_end = len(text.rstrip())
+        kinds = {"∩": "&", "∪": "|", "∅": "empty"}
         while pos < stripped_end:
             match = _TOKEN.match(text, pos)
             if match is None:  # pragma: no cover - the pattern matches any non-space
                 self._fail("unexpected character", pos)
-            if match.group("op"):
-                op = match.group("op")
-                kind = {"∩": "&", "∪": "|", "∅": "empty"}.get(op, op)
-                self.tokens.append((kind, op, match.start("op")))
+            op = match.group("op")
+            if op:
+                yield kinds.get(op, op), op, match.start("op")
             else:
                 name = match.group("name")
-                kind = "empty" if name == "empty" else "name"
-                self.tokens.append((kind, name, match.start("name")))
+                yield ("empty" if name == "empty" else "name"), name, match.start("name")
             pos = match.end()
-        self.tokens.append(("end", "", len(text)))
-        self.pos = 0
-
-    def _fail(self, message: str, where: int) -> None:
-        raise ParseError(f"malformed proposition {self.text!r}: {message} at position {where}")
+        yield "end", "", len(text)
 
     def parse(self) -> Element:
-        if len(self.tokens) == 1:
+        if not self.text.strip():
             raise ParseError("empty proposition string; write 'empty' for the empty element")
-        result = self._union()
-        kind, value, where = self.tokens[self.pos]
-        if kind != "end":
-            self._fail(f"unexpected {value!r}", where)
-        return result
+        bit = self.frame._bit
+        # One entry per open parenthesis (the first for the whole text): the conjunctions of
+        # the union's finished operands, and the value of the intersection being read.
+        union: list[int] = []
+        inter: tuple[int, ...] | None = None
+        stack: list[tuple[list[int], tuple[int, ...] | None]] = []
+        expect_atom = True
+        for kind, value, where in self._tokens():
+            if expect_atom:
+                if kind == "(":
+                    stack.append((union, inter))
+                    union, inter = [], None
+                    continue
+                if kind == "name":
+                    b = bit.get(value)
+                    if b is None:
+                        raise UnknownHypothesisError(
+                            f"unknown hypothesis {value!r} in {_shorten(self.text)!r}; "
+                            f"the frame has {_listing(self.frame.hypotheses)}"
+                        )
+                    atom: tuple[int, ...] = (b,)
+                elif kind == "empty":
+                    atom = ()
+                elif kind == "end":
+                    self._fail("unexpected end, expected a hypothesis or '('", where)
+                else:
+                    self._fail(f"unexpected {value!r}, expected a hypothesis or '('", where)
+                inter = atom if inter is None else self._meet(inter, atom)
+                expect_atom = False
+            elif kind == "&":
+                expect_atom = True
+            elif kind == "|":
+                union.extend(inter)
+                inter = None
+                expect_atom = True
+            elif kind == ")" and stack:
+                union.extend(inter)
+                atom = reduce_terms(union)
+                union, inter = stack.pop()
+                inter = atom if inter is None else self._meet(inter, atom)
+            elif stack:
+                self._fail("missing ')'", where)
+            elif kind == "end":
+                union.extend(inter)
+                return _make(self.frame, reduce_terms(union))
+            else:
+                self._fail(f"unexpected {value!r}", where)
+        raise AssertionError  # pragma: no cover - the last token is "end"
 
-    def _union(self) -> Element:
-        result = self._inter()
-        while self.tokens[self.pos][0] == "|":
-            self.pos += 1
-            result = result | self._inter()
-        return result
+    def _meet(self, x: tuple[int, ...], y: tuple[int, ...]) -> tuple[int, ...]:
+        """x ∩ y of two reduced antichains."""
+        if len(y) == 1:
+            b = y[0]
+            if len(x) == 1:
+                return (x[0] | b,)
+            return reduce_terms([a | b for a in x])
+        if len(x) * len(y) > MAX_PROPOSITION_TERMS:
+            raise ParseError(
+                f"proposition {_shorten(self.text)!r} is too large: an intersection of a union of {len(x):,} "
+                f"conjunctions and one of {len(y):,} has up to {len(x) * len(y):,} conjunctions in normal form "
+                f"(limit {MAX_PROPOSITION_TERMS:,})"
+            )
+        return reduce_terms([a | b for a in x for b in y])
 
-    def _inter(self) -> Element:
-        result = self._atom()
-        while self.tokens[self.pos][0] == "&":
-            self.pos += 1
-            result = result & self._atom()
-        return result
 
-    def _atom(self) -> Element:
-        kind, value, where = self.tokens[self.pos]
-        if kind == "(":
-            self.pos += 1
-            result = self._union()
-            if self.tokens[self.pos][0] != ")":
-                self._fail("missing ')'", self.tokens[self.pos][2])
-            self.pos += 1
-            return result
-        if kind == "name":
-            self.pos += 1
-            if value not in self.frame:
-                raise UnknownHypothesisError(
-                    f"unknown hypothesis {value!r} in {self.text!r}; "
-                    f"the frame has {', '.join(self.frame.hypotheses)}"
-                )
-            return self.frame[value]
-        if kind == "empty":
-            self.pos += 1
-            return self.frame.empty
-        if kind == "end":
-            self._fail("unexpected end, expected a hypothesis or '('", where)
-        self._fail(f"unexpected {value!r}, expected a hypothesis or '('", where)
-        raise AssertionError  # pragma: no cover
+def _shorten(text: str, limit: int = 200) -> str:
+    """A long proposition cut for an error message, which must stay one readable line."""
+    return text if len(text) <= limit else text[:limit] + "…"
+
+
+def _listing(names: Sequence[str], limit: int = 20) -> str:
+    """The hypotheses of a frame for an error message; a large frame is cut short."""
+    if len(names) <= limit:
+        return ", ".join(names)
+    return ", ".join(names[:limit]) + f", … ({len(names):,} hypotheses)"

@@ -14,8 +14,9 @@ full lattice: every operation works on focal elements only.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterator, Sequence
-from typing import Union, overload
+from typing import Any, Union, overload
 
 import numpy as np
 
@@ -23,7 +24,8 @@ from belief.errors import LatticeTooLargeError
 from belief.frame import Element, Frame, reduce_terms, term_key
 from belief.model import Model
 
-__all__ = ["HyperPowerSet", "hyper_power_set", "allowed_regions", "MAX_REGIONS", "MAX_ELEMENTS"]
+__all__ = ["HyperPowerSet", "hyper_power_set", "allowed_regions", "check_lattice_size", "MAX_REGIONS",
+           "MAX_ELEMENTS"]
 
 #: Regions are bits of one unsigned 64-bit word.
 MAX_REGIONS = 64
@@ -63,22 +65,54 @@ def allowed_regions(model: Model, limit: int = MAX_REGIONS) -> list[int]:
     try:
         visit(0, 0)
     except _TooMany:
-        raise LatticeTooLargeError(_too_large_message(model, limit)) from None
+        raise LatticeTooLargeError(_too_large_message(n, model.kind, limit)) from None
     return sorted(found)
+
+
+def check_lattice_size(n: int, model_data: Any = None) -> None:
+    """Refuse at once D^Θ of ``n`` hypotheses that cannot have at most :data:`MAX_REGIONS` regions.
+
+    This needs neither the frame nor the model, which for a huge ``n`` would not fit in
+    memory: ``model_data`` is the model as read from JSON (None for the free model).  Every
+    hypothesis that the model does not declare empty is a region of its own, and a proposition
+    of the model's ``"empty"`` list can declare at most one hypothesis empty per union operand.
+
+    >>> check_lattice_size(6)
+    >>> check_lattice_size(100, {"type": "shafer", "empty": ["t1|t2"]})  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    belief.errors.LatticeTooLargeError: D^Θ of 100 hypotheses under the shafer model has more than 64 Venn regions, ...
+    """
+    kind = "free"
+    removable = 0
+    if model_data is not None:
+        kind = "hybrid"
+        if isinstance(model_data, dict):
+            if isinstance(model_data.get("type"), str):
+                kind = model_data["type"]
+            empty = model_data.get("empty", [])
+            if isinstance(empty, list):
+                removable = sum(e.count("|") + e.count("∪") + 1 for e in empty if isinstance(e, str))
+    if model_data is None:
+        # Free model: 2^n - 1 regions.
+        regions_at_least = (1 << n) - 1 if n <= MAX_REGIONS else MAX_REGIONS + 1
+    else:
+        regions_at_least = n - removable
+    if regions_at_least > MAX_REGIONS:
+        raise LatticeTooLargeError(_too_large_message(n, kind, MAX_REGIONS))
 
 
 class _TooMany(Exception):
     pass
 
 
-def _too_large_message(model: Model, limit: int) -> str:
-    n = len(model.frame)
+def _too_large_message(n: int, kind: str, limit: int) -> str:
     size = _FREE_SIZES.get(n)
     hint = (
         f" (on the free model |D^Θ| = {size:,} for n = {n})" if size and n >= 7 else ""
     )
     return (
-        f"D^Θ of {n} hypotheses under the {model.kind} model has more than {limit} Venn regions, so it "
+        f"D^Θ of {n:,} hypotheses under the {kind} model has more than {limit} Venn regions, so it "
         f"cannot be enumerated{hint}: the number of elements grows like the Dedekind numbers. "
         "Work with focal elements instead (every rule and measure needs only those), "
         "or add constraints to the model"
@@ -118,6 +152,8 @@ def hyper_power_set(model_or_frame: Union[Model, Frame, int]) -> "HyperPowerSet"
     if isinstance(model_or_frame, bool):
         raise TypeError("expected a Model, a Frame or a number of hypotheses")
     if isinstance(model_or_frame, int):
+        if model_or_frame >= 1:
+            check_lattice_size(model_or_frame)
         model = Model.free(Frame.numbered(model_or_frame))
     elif isinstance(model_or_frame, Frame):
         model = Model.free(model_or_frame)
@@ -224,6 +260,35 @@ def _enumerate_upsets(regions: Sequence[int], model: Model) -> np.ndarray:
     return masks
 
 
+def _bit_positions(mask: int) -> Iterator[int]:
+    while mask:
+        low = mask & -mask
+        yield low.bit_length() - 1
+        mask ^= low
+
+
+def _byte_tables(images: Sequence[int]) -> list[np.ndarray]:
+    """Tables of a map f, OR-linear over the bits of a mask (f(m) = OR of images[k] for the bits k of m), by byte."""
+    tables = []
+    for low in range(0, len(images), 8):
+        table = np.zeros(256, dtype=np.uint64)
+        for value in range(1, 256):
+            bit = value & -value
+            i = low + bit.bit_length() - 1
+            table[value] = (table[value ^ bit] | np.uint64(images[i])) if i < len(images) else table[value ^ bit]
+        tables.append(table)
+    return tables
+
+
+def _lookup(tables: list[np.ndarray], masks: np.ndarray) -> np.ndarray:
+    """The OR-linear map of :func:`_byte_tables` applied to every mask."""
+    out = np.zeros_like(masks)
+    byte = np.uint64(0xFF)
+    for j, table in enumerate(tables):
+        out |= table[(masks >> np.uint64(8 * j)) & byte]
+    return out
+
+
 class HyperPowerSet(Sequence):
     """D^Θ under a model, as a sequence of elements backed by region masks.
 
@@ -311,25 +376,69 @@ class HyperPowerSet(Sequence):
             self._below_cache = cached
         return cached
 
-    def strings(self, style: str = "ascii", chunk: int = 65536) -> Iterator[str]:
-        """The canonical text of every element, in order; much faster than formatting elements one by one."""
-        names = [self.frame.term_name(r, style) for r in self.regions]
-        keys = [term_key(r) for r in self.regions]
+    def strings(self, style: str = "ascii", chunk: int = 65536, *, json_escaped: bool = False) -> Iterator[str]:
+        """The canonical text of every element, in order; much faster than formatting elements one by one.
+
+        With ``json_escaped`` the hypothesis names are written as inside a JSON string (quotes
+        and backslashes escaped).
+        """
+        for block in self.string_blocks(style, chunk, json_escaped=json_escaped):
+            yield from block
+
+    def string_blocks(self, style: str = "ascii", chunk: int = 65536, *,
+                      json_escaped: bool = False) -> Iterator[list[str]]:
+        """:meth:`strings` in lists of ``chunk`` texts (the last may be shorter), for writing out in bulk.
+
+        Each element's minimal regions are found, and renumbered in printing order, with
+        lookup tables on each byte of the region masks (numpy, a chunk at a time); its text
+        is then put together from four tables, each holding the text of every combination of
+        sixteen consecutive regions in printing order.
+        """
+        if style not in ("ascii", "unicode"):
+            raise ValueError(f"style must be 'ascii' or 'unicode', got {style!r}")
+        regions = self.regions
+        names = [self.frame.term_name(r, style) for r in regions]
+        if json_escaped:
+            names = [json.dumps(name, ensure_ascii=False)[1:-1] for name in names]
         joiner = "|" if style == "ascii" else " ∪ "
         empty = "empty" if style == "ascii" else "∅"
+        order = sorted(range(len(regions)), key=lambda k: term_key(regions[k]))
+        rank = [0] * len(regions)
+        for position, k in enumerate(order):
+            rank[k] = position
+        above = [0] * len(regions)          # for each region, its allowed one-larger regions
+        for k, below in enumerate(self._below):
+            for j in _bit_positions(below):
+                above[j] |= 1 << k
+        cover_tables = _byte_tables(above)
+        rank_tables = _byte_tables([1 << r for r in rank])
+        texts = []
+        for low in range(0, max(len(regions), 1), 16):
+            size = 1 << min(16, len(regions) - low)
+            table = [""] * size
+            for value in range(1, size):
+                bit = value & -value
+                table[value] = joiner + names[order[low + bit.bit_length() - 1]] + table[value ^ bit]
+            texts.append(table)
+        cut = len(joiner)
+        mask16 = np.uint64(0xFFFF)
         for start in range(0, len(self), chunk):
-            for minimal in self._minimal_masks(self.masks[start:start + chunk]).tolist():
-                if not minimal:
-                    yield empty
-                    continue
-                picked = []
-                while minimal:
-                    low = minimal & -minimal
-                    picked.append(low.bit_length() - 1)
-                    minimal ^= low
-                if len(picked) > 1:
-                    picked.sort(key=keys.__getitem__)
-                yield joiner.join(names[k] for k in picked)
+            masks = self.masks[start:start + chunk]
+            minimal = masks & ~_lookup(cover_tables, masks)
+            printed = _lookup(rank_tables, minimal)
+            parts = [((printed >> np.uint64(16 * j)) & mask16).tolist() for j in range(len(texts))]
+            if len(parts) == 1:
+                (t0,), (p0,) = texts, parts
+                yield [t0[a][cut:] or empty for a in p0]
+            elif len(parts) == 2:
+                t0, t1 = texts
+                yield [(t0[a] + t1[b])[cut:] or empty for a, b in zip(*parts)]
+            elif len(parts) == 3:
+                t0, t1, t2 = texts
+                yield [(t0[a] + t1[b] + t2[c])[cut:] or empty for a, b, c in zip(*parts)]
+            else:
+                t0, t1, t2, t3 = texts
+                yield [(t0[a] + t1[b] + t2[c] + t3[d])[cut:] or empty for a, b, c, d in zip(*parts)]
 
     def mask_of(self, element: Union[Element, str]) -> int:
         """The region mask of an element (reduced under the model first)."""

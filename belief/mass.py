@@ -9,16 +9,19 @@ from __future__ import annotations
 
 import json
 import math
+import reprlib
+import sys
 from collections.abc import Iterator, Mapping
 from typing import Any, Union
 
 import numpy as np
 
 from belief.batch import SUM_TOLERANCE, MassBatch, check_masses, resolve_model
-from belief.errors import FormatError, InvalidMassError
+from belief.errors import FormatError, InvalidMassError, UndefinedTransformError
 from belief.frame import Element, Frame, make_elements
 from belief.model import Model
 from belief.plan import RANK_TABLE_WIDTH, union_elements, union_ranks
+from belief.textfiles import load_json
 
 __all__ = ["MassFunction"]
 
@@ -156,7 +159,7 @@ class MassFunction(_MassSlots):
         frame = model.frame
         plain = frame._plain
         shafer = model.kind == "shafer"
-        forbidden = bool(model.forbidden) and not shafer
+        forbidden = not shafer and bool(model.forbidden)
         seen: set[tuple[int, ...]] = set()
         items = []
         single = True                   # every conjunction a single hypothesis
@@ -173,6 +176,8 @@ class MassFunction(_MassSlots):
                 return False
             if type(value) is not float:
                 if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+                    return False
+                if type(value) is int and value.bit_length() > 1000:
                     return False
                 value = float(value)
             if not 0.0 <= value < math.inf:
@@ -494,6 +499,7 @@ class MassFunction(_MassSlots):
 
         m(∅) is removed and the rest rescaled by 1 - m(∅).
         """
+        check_cardinality_range(self, "BetP")
         return self._one("betp", query)
 
     def dsmp(self, query: Query, epsilon: float = 0.001) -> float:
@@ -503,15 +509,18 @@ class MassFunction(_MassSlots):
         >>> round(m.dsmp("a", epsilon=0), 12)
         0.666666666667
         """
+        check_cardinality_range(self, "DSmP", epsilon)
         return self._one("dsmp", query, epsilon=epsilon)
 
     def pignistic(self) -> dict[str, float]:
         """BetP of every hypothesis, ``{name: probability}``."""
+        check_cardinality_range(self, "BetP")
         values = self.batch().pignistic()[0]
         return dict(zip(self.frame.hypotheses, values.tolist()))
 
     def dsmp_probabilities(self, epsilon: float = 0.001) -> dict[str, float]:
         """DSmP_ε of every hypothesis, ``{name: probability}``."""
+        check_cardinality_range(self, "DSmP", epsilon)
         values = self.batch().dsmp(list(self.frame.singletons), epsilon=epsilon)[0]
         return dict(zip(self.frame.hypotheses, values.tolist()))
 
@@ -601,11 +610,7 @@ class MassFunction(_MassSlots):
     @classmethod
     def from_json(cls, text: Union[str, bytes]) -> "MassFunction":
         """Parse a BBA file's text."""
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise FormatError(f"not valid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}") from None
-        return cls.from_dict(data)
+        return cls.from_dict(load_json(text))
 
 
 _NUMBERS = (int, float, np.integer, np.floating)
@@ -643,6 +648,8 @@ def _spaced_unions(mass: MassFunction, masses: Mapping, model: Model, bit: dict[
             return False
         if type(value) is not float:
             if type(value) is bool or not isinstance(value, _NUMBERS):
+                return False
+            if type(value) is int and value.bit_length() > 1000:
                 return False
             value = float(value)
         masks.append(mask)
@@ -686,5 +693,70 @@ def _sort_key(item: tuple[Element, float]) -> tuple:
 
 def _as_mass(value: Any, key: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise InvalidMassError(f"the mass of {key!s} must be a number, got {value!r}")
-    return float(value)
+        raise InvalidMassError(f"the mass of {_key_text(key)} must be a number, "
+                               f"got {_show.repr(value)}")
+    try:
+        return float(value)
+    except OverflowError:
+        digits = int(int(value).bit_length() * math.log10(2)) + 1
+        raise InvalidMassError(f"the mass of {_key_text(key)} is an integer of "
+                               f"about {digits:,} digits, too large for a float; masses lie in [0, 1]") from None
+
+
+def _key_text(key: Any) -> str:
+    text = str(key)
+    return text if len(text) <= 60 and text.isprintable() else _show.repr(text)
+
+
+# Messages quote user data cut short (and shallow), so that they stay one line.
+_show = reprlib.Repr()
+_show.maxlevel = 2
+_show.maxstring = 60
+_show.maxother = 60
+
+
+def check_cardinality_range(mass: MassFunction, what: str, epsilon: float | None = None) -> None:
+    """Refuse a transformation whose DSm cardinalities, or ε times them, do not fit a float.
+
+    BetP and DSmP divide by C_M(X) (DSmP by m(X's singletons) + ε C_M(X)) in floating point;
+    past the largest float (about 1.8e308) the quotient would come out as 0 or NaN instead
+    of the right value.  C_M(X) ≤ 2^n - 1, so frames of fewer than 1 023 hypotheses with
+    ε ≤ 1 pass without computing anything.
+
+    Raises
+    ------
+    UndefinedTransformError
+        Naming the focal element, its cardinality and, for DSmP, the largest usable ε.
+    """
+    if epsilon is not None:
+        try:
+            epsilon = float(epsilon)
+        except (TypeError, ValueError, OverflowError):
+            return                      # MassBatch.dsmp names the bad ε
+        if not math.isfinite(epsilon) or epsilon < 0:
+            return
+    model = mass.model
+    if len(model.frame) < 1023 and (epsilon is None or epsilon <= 1.0):
+        return
+    biggest, focal = max((model.cardinality(x), i) for i, x in enumerate(mass.focal))
+    x = mass.focal[focal]
+    if biggest.bit_length() > 1023:
+        raise UndefinedTransformError(
+            f"{what} is out of floating-point range: the DSm cardinality of {_show.repr(str(x))} under the "
+            f"{model.kind} model of {len(model.frame):,} hypotheses is about 2^{biggest.bit_length() - 1}, more "
+            "than the largest float (about 2^1024); use Shafer's model or constraints that leave fewer Venn regions"
+        )
+    if epsilon is not None and not math.isfinite(epsilon * float(biggest)):
+        raise UndefinedTransformError(
+            f"DSmP with ε = {epsilon:g} is out of floating-point range: ε·C({_show.repr(str(x))}) = "
+            f"{epsilon:g}·{biggest} exceeds the largest float, and the shares of that element would be lost; "
+            f"use ε ≤ {_largest_epsilon(biggest):.6g} (as ε grows DSmP tends to BetP)"
+        )
+
+
+def _largest_epsilon(cardinality: int) -> float:
+    """The largest ε whose product with ``cardinality`` is a finite float."""
+    epsilon = sys.float_info.max / cardinality
+    while not math.isfinite(epsilon * float(cardinality)):
+        epsilon = math.nextafter(epsilon, 0.0)
+    return epsilon

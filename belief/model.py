@@ -11,16 +11,28 @@ equality, ∩, ∪ and ⊆ stay cheap bit operations.
 
 from __future__ import annotations
 
+import reprlib
 from collections.abc import Iterable, Mapping
 from functools import lru_cache
 from typing import Any, Union
 
-from belief.errors import FormatError, ModelError
-from belief.frame import Element, Frame, reduce_terms
+from belief.errors import FormatError, LatticeTooLargeError, ModelError
+from belief.frame import Element, Frame, _listing, reduce_terms
 
-__all__ = ["Model"]
+__all__ = ["Model", "MAX_LISTED_CONSTRAINTS"]
 
 _KINDS = ("free", "shafer", "hybrid", "tracking")
+
+#: Shafer's model forbids every pair of hypotheses without listing them; a model that must list
+#: them (Shafer's model with extra empty propositions, or :attr:`Model.forbidden` read on a large
+#: frame) is refused beyond this many pairs, which would take gigabytes and minutes.
+MAX_LISTED_CONSTRAINTS = 500_000
+
+# Messages quote user data cut short (and shallow), so that they stay one line.
+_show = reprlib.Repr()
+_show.maxlevel = 2
+_show.maxstring = 60
+_show.maxother = 60
 
 
 class Model:
@@ -50,7 +62,7 @@ class Model:
     (3, 7)
     """
 
-    __slots__ = ("frame", "kind", "forbidden", "false_alarm", "_hash", "_unions")
+    __slots__ = ("frame", "kind", "_forbidden", "false_alarm", "_hash", "_unions")
 
     def __init__(self, frame: Frame, forbidden: Iterable[int] = (), *, kind: str = "hybrid",
                  false_alarm: str | None = None) -> None:
@@ -58,17 +70,47 @@ class Model:
             raise TypeError("Model needs a Frame")
         if kind not in _KINDS:
             raise ModelError(f"unknown model type {kind!r}; known types: {', '.join(_KINDS)}")
+        self.frame = frame
+        self.kind = kind
+        self.false_alarm = false_alarm
+        self._unions = None             # what MassFunction needs to read unions of hypotheses (filled there)
+        if kind == "shafer":
+            # Every pair of hypotheses is forbidden: n(n-1)/2 conjunctions, listed only when asked for.
+            self._forbidden = None
+            self._hash = _SHAFER_HASH ^ frame._hash
+            return
         full = (1 << len(frame)) - 1
         terms = list(forbidden)
         for term in terms:
             if isinstance(term, bool) or not isinstance(term, int) or term <= 0 or term & ~full:
-                raise ModelError(f"{term!r} is not a conjunction mask of this frame")
-        self.frame = frame
-        self.kind = kind
-        self.forbidden = reduce_terms(terms)
-        self.false_alarm = false_alarm
-        self._hash = hash(("belief.Model", frame, self.forbidden))
-        self._unions = None             # what MassFunction needs to read unions of hypotheses (filled there)
+                raise ModelError(f"{_show.repr(term)} is not a conjunction mask of this frame")
+        self._forbidden = reduce_terms(terms)
+        if _all_pairs(self._forbidden, len(frame)):
+            self._hash = _SHAFER_HASH ^ frame._hash     # equal to Shafer's model, so hashed alike
+        else:
+            self._hash = hash(("belief.Model", frame, self._forbidden))
+
+    @property
+    def forbidden(self) -> tuple[int, ...]:
+        """The minimal forbidden conjunctions (hypothesis bit masks), in canonical order.
+
+        Shafer's model lists its n(n-1)/2 pairs on first use; more than
+        :data:`MAX_LISTED_CONSTRAINTS` raise :class:`~belief.errors.LatticeTooLargeError`.
+        """
+        listed = self._forbidden
+        if listed is None:
+            n = len(self.frame)
+            _check_listing(n * (n - 1) // 2, n, "Shafer's model")
+            listed = tuple((1 << i) | (1 << j) for i in range(n) for j in range(i + 1, n))
+            self._forbidden = listed
+        return listed
+
+    @property
+    def constrained(self) -> bool:
+        """True if the model forbids some region (it is not the free model)."""
+        if self._forbidden is None:
+            return len(self.frame) > 1
+        return bool(self._forbidden)
 
     # -- constructors ------------------------------------------------------------------
     @classmethod
@@ -79,9 +121,7 @@ class Model:
     @classmethod
     def shafer(cls, frame: Frame) -> "Model":
         """Shafer's model: the hypotheses are exclusive, so D^Θ becomes the power set 2^Θ."""
-        n = len(frame)
-        pairs = [(1 << i) | (1 << j) for i in range(n) for j in range(i + 1, n)]
-        return cls(frame, pairs, kind="shafer")
+        return cls(frame, kind="shafer")
 
     @classmethod
     def hybrid(cls, frame: Frame, empty: Iterable[Union[str, Element]] = ()) -> "Model":
@@ -90,15 +130,26 @@ class Model:
         ``empty=["a&b"]`` is an exclusivity constraint; ``empty=["c"]`` says that θ_c
         does not exist; ``empty=["a&b|c"]`` says both.
         """
-        if isinstance(empty, (str, Element)):
-            empty = [empty]
-        terms: list[int] = []
-        for proposition in empty:
-            element = frame.element(proposition)
-            if element.is_empty:
-                continue
-            terms.extend(element.terms)
-        return cls(frame, terms, kind="hybrid")
+        return cls(frame, _empty_terms(frame, empty), kind="hybrid")
+
+    def _checked(self, empty: Iterable[Union[str, Element]]) -> "Model":
+        """The model itself, unless it declares every hypothesis empty (then every element is ∅).
+
+        Only models read from a file are refused so: :meth:`hybrid` keeps building the
+        degenerate model, which property-based tests generate on purpose.
+        """
+        singles = 0
+        for term in self._forbidden or ():
+            if not term & (term - 1):
+                singles |= term
+        if singles == (1 << len(self.frame)) - 1:
+            listed = [str(e) for e in empty] if not isinstance(empty, (str, Element)) else [str(empty)]
+            raise ModelError(
+                f"the model declares every hypothesis empty ({_listing(self.frame.hypotheses)}) through "
+                f"{_show.repr(listed)}, so every element is empty under it and no mass can be placed; "
+                "leave at least one hypothesis possible"
+            )
+        return self
 
     @classmethod
     def tracking(cls, frame: Frame, false_alarm: str = "FA") -> "Model":
@@ -135,14 +186,24 @@ class Model:
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Model):
             return NotImplemented
-        return self.forbidden == other.forbidden and self.frame == other.frame
+        if self is other:
+            return True
+        if self.frame != other.frame:
+            return False
+        mine, theirs = self._forbidden, other._forbidden
+        if mine is None or theirs is None:
+            # Shafer's model against another: compared without listing its pairs.
+            if mine is None and theirs is None:
+                return True
+            return _all_pairs(theirs if mine is None else mine, len(self.frame))
+        return mine == theirs
 
     def __hash__(self) -> int:
         return self._hash
 
     def __reduce__(self):
         # Rebuild on unpickling: the cached hash depends on the interpreter run.
-        return (_restore_model, (self.frame, self.forbidden, self.kind, self.false_alarm))
+        return (_restore_model, (self.frame, self._forbidden or (), self.kind, self.false_alarm))
 
     def __repr__(self) -> str:
         if self.kind in ("free", "shafer"):
@@ -157,7 +218,7 @@ class Model:
         """True if the conjunction (equivalently the region) ``term`` is empty under the model."""
         if self.kind == "shafer":
             return term.bit_count() > 1
-        return any(f & ~term == 0 for f in self.forbidden)
+        return any(f & ~term == 0 for f in self._forbidden)
 
     def kept_terms(self, terms: tuple[int, ...]) -> tuple[int, ...]:
         """The conjunctions of a canonical antichain that the model allows (its form under the model).
@@ -166,21 +227,21 @@ class Model:
         >>> Model.hybrid(Frame(["a", "b", "c"]), empty=["a&b"]).kept_terms((3, 4))
         (4,)
         """
-        forbidden = self.forbidden
-        if not forbidden:
-            return terms
         if self.kind == "shafer":
             return tuple(t for t in terms if not t & (t - 1))
+        forbidden = self._forbidden
+        if not forbidden:
+            return terms
         return tuple(t for t in terms if not any(f & ~t == 0 for f in forbidden))
 
     def reduce(self, element: Union[Element, str]) -> Element:
         """The canonical form of an element under this model (forbidden conjunctions dropped)."""
         if not (isinstance(element, Element) and element.frame is self.frame):
             element = self.frame.element(element)
-        if not self.forbidden:
-            return element
         if self.kind == "shafer":
             kept = tuple(t for t in element.terms if not t & (t - 1))
+        elif not self._forbidden:
+            return element
         else:
             kept = tuple(t for t in element.terms if not self.is_forbidden(t))
         if len(kept) == len(element.terms):
@@ -231,13 +292,26 @@ class Model:
         element = self.reduce(element)
         if not element.terms:
             return 0
+        if self.kind == "shafer":
+            # The allowed regions are the single hypotheses, and a reduced element keeps only those.
+            return len(element.terms)
         universe = (1 << len(self.frame)) - 1
-        return _count_regions(element.terms, self.forbidden, universe)
+        try:
+            return _count_regions(element.terms, self._forbidden, universe)
+        except RecursionError:
+            raise LatticeTooLargeError(
+                f"the DSm cardinality of {_show.repr(str(element))} under the {self.kind} model of "
+                f"{len(self.frame):,} hypotheses is too intricate to count (too many nested case splits over "
+                "hypotheses); use fewer hypotheses or more constraints"
+            ) from None
 
     def is_refined_by(self, other: "Model") -> bool:
         """True if ``other`` is at least as strict (forbids every region this model forbids)."""
         if other.frame != self.frame:
             return False
+        if other.kind == "shafer":
+            # Every region of two or more hypotheses is forbidden: only single hypotheses matter.
+            return all(other.is_forbidden(f) for f in self._forbidden or () if not f & (f - 1))
         return all(other.is_forbidden(f) for f in self.forbidden)
 
     # -- serialisation ----------------------------------------------------------------------
@@ -275,10 +349,11 @@ class Model:
         if data is None:
             return cls.free(frame)
         if not isinstance(data, Mapping):
-            raise FormatError(f"a model must be a JSON object with a \"type\", got {data!r}")
+            raise FormatError(f"a model must be a JSON object with a \"type\", got {_show.repr(data)}")
         kind = data.get("type", "free" if "empty" not in data else "hybrid")
         if not isinstance(kind, str):
-            raise FormatError(f"a model's \"type\" must be a string, one of {', '.join(_KINDS)}; got {kind!r}")
+            raise FormatError(f"a model's \"type\" must be a string, one of {', '.join(_KINDS)}; "
+                              f"got {_show.repr(kind)}")
         accepted = {"type", "empty"} | ({"false_alarm"} if kind == "tracking" else set())
         unknown = set(data) - accepted
         if unknown and kind in _KINDS:
@@ -293,22 +368,70 @@ class Model:
         elif kind == "shafer":
             base = cls.shafer(frame)
         elif kind == "hybrid":
-            return cls.hybrid(frame, empty)
+            return cls.hybrid(frame, empty)._checked(empty)
         elif kind == "tracking":
             fa = data.get("false_alarm", "FA")
             if not isinstance(fa, str):
                 raise FormatError("\"false_alarm\" must be a hypothesis name")
             base = cls.tracking(frame, fa)
         else:
-            raise FormatError(f"unknown model type {kind!r}; known types: {', '.join(_KINDS)}")
-        extra = cls.hybrid(frame, empty)
-        if all(base.is_forbidden(term) for term in extra.forbidden):
+            raise FormatError(f"unknown model type {_show.repr(kind)}; known types: {', '.join(_KINDS)}")
+        extra = reduce_terms(_empty_terms(frame, empty))
+        if all(base.is_forbidden(term) for term in extra):
             return base
-        return cls(frame, base.forbidden + extra.forbidden, kind="hybrid")
+        if base.kind == "shafer":
+            # Only the hypotheses declared empty add to Shafer's pairs; the pairs that hold one
+            # of them are absorbed by it, and the others are listed in canonical order directly.
+            gone = 0
+            for term in extra:
+                if not term & (term - 1):
+                    gone |= term
+            kept = [i for i in range(len(frame)) if not gone >> i & 1]
+            _check_listing(len(kept) * (len(kept) - 1) // 2, len(frame), "Shafer's model with empty propositions")
+            # Listed reduced and in canonical order at once: (i,) or the pairs (i, j), i ascending.
+            listed: list[int] = []
+            k = 0
+            for i in range(len(frame)):
+                if gone >> i & 1:
+                    listed.append(1 << i)
+                else:
+                    k += 1
+                    listed.extend((1 << i) | (1 << j) for j in kept[k:])
+            model = cls(frame, kind="hybrid")
+            model._forbidden = tuple(listed)
+            model._hash = hash(("belief.Model", frame, model._forbidden))
+            return model._checked(empty)
+        return cls(frame, list(base.forbidden) + list(extra), kind="hybrid")._checked(empty)
 
 
 def _restore_model(frame: Frame, forbidden: tuple[int, ...], kind: str, false_alarm: str | None) -> Model:
     return Model(frame, forbidden, kind=kind, false_alarm=false_alarm)
+
+
+_SHAFER_HASH = hash("belief.Model.shafer")
+
+
+def _all_pairs(forbidden: tuple[int, ...], n: int) -> bool:
+    """Whether a reduced antichain is every pair of n hypotheses (Shafer's model)."""
+    return len(forbidden) == n * (n - 1) // 2 and all(t.bit_count() == 2 for t in forbidden)
+
+
+def _check_listing(count: int, n: int, what: str) -> None:
+    if count > MAX_LISTED_CONSTRAINTS:
+        raise LatticeTooLargeError(
+            f"{what} on {n:,} hypotheses needs {count:,} forbidden conjunctions listed, more than "
+            f"MAX_LISTED_CONSTRAINTS = {MAX_LISTED_CONSTRAINTS:,}; use fewer hypotheses"
+        )
+
+
+def _empty_terms(frame: Frame, empty: Iterable[Union[str, Element]]) -> list[int]:
+    """The conjunctions of the propositions a model declares empty."""
+    if isinstance(empty, (str, Element)):
+        empty = [empty]
+    terms: list[int] = []
+    for proposition in empty:
+        terms.extend(frame.element(proposition).terms)
+    return terms
 
 
 @lru_cache(maxsize=65536)
@@ -336,6 +459,18 @@ def _count_regions(terms: tuple[int, ...], forbidden: tuple[int, ...], universe:
     universe &= used
     if not forbidden and len(terms) == 1:
         return 1 << (universe.bit_count() - terms[0].bit_count() + factor)
+    if not forbidden and len(terms) >= 8:
+        # Every set meets a union of hypotheses, but the empty one.
+        if all(not t & (t - 1) for t in terms):
+            return ((1 << universe.bit_count()) - 1) << factor
+        # The sets that hold no term are counted apart on each group of terms linked by
+        # shared hypotheses, and multiplied: this keeps the case splits few and shallow.
+        groups = _linked_groups(terms)
+        if len(groups) > 1:
+            avoiding = 1
+            for mask, group in groups:
+                avoiding *= (1 << mask.bit_count()) - _count_regions(reduce_terms(group), (), mask)
+            return ((1 << universe.bit_count()) - avoiding) << factor
     # A single-hypothesis constraint excludes that hypothesis outright.
     for f in forbidden:
         if f.bit_count() == 1:
@@ -363,6 +498,36 @@ def _count_regions(terms: tuple[int, ...], forbidden: tuple[int, ...], universe:
         rest_universe,
     )
     return (with_v + without_v) << factor
+
+
+def _linked_groups(terms: tuple[int, ...]) -> list[tuple[int, list[int]]]:
+    """The terms in groups linked by shared hypotheses (union-find on hypothesis bits), with each group's hypotheses."""
+    parent: dict[int, int] = {}
+
+    def find(b: int) -> int:
+        root = parent.setdefault(b, b)
+        while root != b:
+            parent[b] = parent[root]
+            b, root = root, parent[root]
+        return root
+
+    for t in terms:
+        low = t & -t
+        root = find(low)
+        m = t ^ low
+        while m:
+            b = m & -m
+            m ^= b
+            other = find(b)
+            if other != root:
+                parent[other] = root
+    groups: dict[int, tuple[int, list[int]]] = {}
+    for t in terms:
+        root = find(t & -t)
+        mask, group = groups.get(root, (0, []))
+        group.append(t)
+        groups[root] = (mask | t, group)
+    return list(groups.values())
 
 
 def _reduce_or_zero(terms: Iterable[int]) -> tuple[int, ...]:
