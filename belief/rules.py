@@ -32,7 +32,7 @@ import numpy as np
 
 from belief import bayesian
 from belief import plan as limits
-from belief.batch import MassBatch, check_refines
+from belief.batch import SUM_TOLERANCE, MassBatch, check_refines
 from belief.bayesian import ENGINES
 from belief.errors import BeliefError, FrameError, InvalidMassError, ModelError, TotalConflictError
 from belief.frame import Element
@@ -240,7 +240,7 @@ def combine(*sources: Source, rule: Union[str, RuleInfo] = "dempster", model: Mo
         if not options:
             fused = _single(info, sources, model)
             if fused is not None:
-                return _renormalised(fused)
+                return _renormalised(fused, len(sources[0]) if len(sources) == 1 else len(sources))
     else:
         bayesian.check_engine(engine)
     unknown = set(options) - set(info.options)
@@ -252,13 +252,14 @@ def combine(*sources: Source, rule: Union[str, RuleInfo] = "dempster", model: Mo
         if info.name == "r_rule":
             _check_r_options(**options)
         fused, reason = bayesian.closed_form(info.name, batches, fusion_model, options,
-                                             lambda *args, **kwargs: _renormalised(info.function(*args, **kwargs)))
+                                             lambda *args, **kwargs: _renormalised(info.function(*args, **kwargs),
+                                                                                   len(batches)))
         if fused is None:
             if engine == "bayesian":
                 raise bayesian.not_applicable(reason)
         elif not single:
             return fused
-    result = _renormalised(info.function(batches, fusion_model, **options))
+    result = _renormalised(info.function(batches, fusion_model, **options), len(batches))
     return result[0] if single else result
 
 
@@ -266,34 +267,37 @@ def combine(*sources: Source, rule: Union[str, RuleInfo] = "dempster", model: Mo
 RESULT_TOLERANCE = 1e-13
 
 
-def _renormalised(result: Source) -> Source:
+def _renormalised(result: Source, sources: int) -> Source:
     """The result with every row rescaled to sum to one where it is off by more than :data:`RESULT_TOLERANCE`.
 
     Sources are accepted when they sum to one within
     :data:`~belief.batch.SUM_TOLERANCE`, and the masses of a combination sum to the
     product of the sources' sums: left alone, the error would compound over repeated
     combinations until a result is no longer a valid input.  Rows within the tolerance
-    are returned bit for bit.
+    are returned bit for bit, and so are rows off by more than the ``sources`` sums can
+    explain: that is a fault of the rule, which :func:`belief.testing.check_rule` must see.
     """
+    reach = 2 * sources * SUM_TOLERANCE
     if type(result) is MassFunction:
         floats = result._floats
         if floats is not None:
             total = fsum(floats)
-            if abs(total - 1.0) <= RESULT_TOLERANCE:
+            if not RESULT_TOLERANCE < abs(total - 1.0) <= reach:
                 return result
             if result._masks is not None:
                 return MassFunction._from_masks(result.model, result._masks, tuple([x / total for x in floats]),
                                                 result._loose)
         else:
             total = fsum(result.values.tolist())
-            if abs(total - 1.0) <= RESULT_TOLERANCE:
+            if not RESULT_TOLERANCE < abs(total - 1.0) <= reach:
                 return result
             if result._masks is not None:
                 return MassFunction._from_masks(result.model, result._masks, result.values / total)
-        return _renormalised(result.batch())[0]
+        return _renormalised(result.batch(), sources)[0]
     values = result.values
     totals = values.sum(axis=1)
-    off = np.abs(totals - 1.0) > RESULT_TOLERANCE
+    error = np.abs(totals - 1.0)
+    off = (error > RESULT_TOLERANCE) & (error <= reach)
     if not off.any():
         return result
     scale = np.where(off, totals, 1.0)
