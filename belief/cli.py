@@ -431,6 +431,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# A message quotes user text, which may hold line breaks; escaped, the refusal stays one line.
+_LINE_BREAKS = str.maketrans({c: c.encode("unicode_escape").decode("ascii")
+                              for c in "\n\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029"})
+
+
+def _one_line(message: str) -> str:
+    return message.translate(_LINE_BREAKS)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
     try:
@@ -444,7 +453,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(exc, file=sys.stderr)
         return 2
     except BeliefError as exc:
-        print(f"belief: error: {exc}", file=sys.stderr)
+        print(f"belief: error: {_one_line(str(exc))}", file=sys.stderr)
         return 1
     except BrokenPipeError:
         return 0

@@ -590,7 +590,7 @@ class MassFunction(_MassSlots):
             raise FormatError("a BBA must be a JSON object with \"frame\" and \"mass\"")
         unknown = set(data) - {"frame", "model", "mass", "subnormal"}
         if unknown:
-            raise FormatError(f"unknown key(s) in BBA: {', '.join(sorted(map(str, unknown)))}")
+            raise FormatError(f"unknown key(s) in BBA: {', '.join(sorted(map(_key_text, unknown)))}")
         for key in ("frame", "mass"):
             if key not in data:
                 raise FormatError(f"the BBA has no \"{key}\"")

@@ -358,7 +358,8 @@ class Model:
         unknown = set(data) - accepted
         if unknown and kind in _KINDS:
             raise FormatError(
-                f"key(s) {', '.join(sorted(map(str, unknown)))} do not belong to a {kind} model"
+                f"key(s) {', '.join(sorted(k if k.isprintable() else repr(k) for k in map(str, unknown)))} "
+                f"do not belong to a {kind} model"
             )
         empty = data.get("empty", [])
         if isinstance(empty, str) or not isinstance(empty, list) or not all(isinstance(e, str) for e in empty):
