@@ -295,6 +295,9 @@ def _renormalised(result: Source, sources: int) -> Source:
                 return MassFunction._from_masks(result.model, result._masks, result.values / total)
         return _renormalised(result.batch(), sources)[0]
     values = result.values
+    if values.shape[0] == 1 and values.shape[1] <= 64:
+        if not RESULT_TOLERANCE < abs(fsum(values[0].tolist()) - 1.0) <= reach:
+            return result
     totals = values.sum(axis=1)
     error = np.abs(totals - 1.0)
     off = (error > RESULT_TOLERANCE) & (error <= reach)
@@ -605,6 +608,10 @@ def _tuple_targets_rule(batches: Sequence[MassBatch], model: Model, key: str) ->
     return _scatter_products(batches, model, scatter, columns, plan.count)
 
 
+#: Two sources whose tuples × rows are at most this many are combined without a cost estimate.
+SMALL_PAIR = 4096
+
+
 def _prune(batch: MassBatch) -> MassBatch:
     """Drop the columns that are zero in every row (they would only widen the next fold)."""
     live = np.flatnonzero((batch.values != 0).any(axis=0))
@@ -616,6 +623,9 @@ def _prune(batch: MassBatch) -> MassBatch:
 
 def _fold(batches: Sequence[MassBatch], model: Model, key: str, rule: str = "conjunctive") -> MassBatch:
     """Combine pairwise, left to right, each step checked against the limits of :mod:`belief.plan` first."""
+    if len(batches) == 2 and len(batches[0].focal) * len(batches[1].focal) * len(batches[0]) * len(batches[1]) \
+            <= SMALL_PAIR:
+        return _tuple_targets_rule(batches, model, key)        # far below every limit: not worth the check
     budget = _budget(batches, model, rule)
     budget.step(len(batches[0].focal), len(batches[1].focal), 2)
     result = _tuple_targets_rule(batches[:2], model, key)
