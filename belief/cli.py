@@ -114,8 +114,8 @@ def _cmd_lattice(args: argparse.Namespace) -> int:
         print(len(lattice))
     else:
         out = sys.stdout
-        for block in lattice.string_blocks():
-            out.write("\n".join(block) + "\n")
+        for block in lattice.text_blocks("\n"):
+            out.write(block + "\n")
     return 0
 
 
@@ -132,8 +132,8 @@ def _print_lattice_json(lattice, with_elements: bool) -> None:
         return
     out.write(head[:-2] + ',\n  "elements": [')
     first = True
-    for block in lattice.string_blocks(json_escaped=True):
-        out.write(("\n" if first else ",\n") + '    "' + '",\n    "'.join(block) + '"')
+    for block in lattice.text_blocks('",\n    "', json_escaped=True):
+        out.write(("\n" if first else ",\n") + '    "' + block + '"')
         first = False
     out.write("\n  ]\n}\n")
 

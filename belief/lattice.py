@@ -394,6 +394,56 @@ class HyperPowerSet(Sequence):
         is then put together from four tables, each holding the text of every combination of
         sixteen consecutive regions in printing order.
         """
+        for texts, parts, cut, empty, _ in self._printed_parts(style, chunk, json_escaped):
+            yield self._joined_list(texts, parts, cut, empty)
+
+    def text_blocks(self, separator: str = "\n", style: str = "ascii", chunk: int = 65536, *,
+                    json_escaped: bool = False) -> Iterator[str]:
+        """:meth:`string_blocks` with each block's texts joined by ``separator``, as one string.
+
+        Faster than joining the lists, for listing millions of elements: the pieces of all
+        the texts are gathered from the tables by numpy and joined once, so that no string
+        is made per element.
+        """
+        tables = None
+        for texts, parts, cut, empty, has_empty in self._printed_parts(style, chunk, json_escaped, lists=False):
+            if has_empty:
+                yield separator.join(self._joined_list(texts, [p.tolist() for p in parts], cut, empty))
+                continue
+            if tables is None:
+                # Each table twice: as it is, and with the union sign before its first term
+                # removed, for the first non-empty piece of a text.
+                tables = [np.array(table + [text[cut:] for text in table], dtype=object) for table in texts]
+            first = np.argmax(np.column_stack(parts) != 0, axis=1)
+            # The pieces of every text and a separator after each, gathered by numpy and
+            # joined once: no string is made per element.
+            pieces = np.empty((len(parts[0]), len(parts) + 1), dtype=object)
+            for j, (table, indices) in enumerate(zip(tables, parts)):
+                pieces[:, j] = table[indices + (first == j) * (len(table) // 2)]
+            pieces[:, -1] = separator
+            block = "".join(pieces.ravel().tolist())
+            yield block[:len(block) - len(separator)]
+
+    @staticmethod
+    def _joined_list(texts: list, parts: list, cut: int, empty: str) -> list[str]:
+        if len(parts) == 1:
+            (t0,), (p0,) = texts, parts
+            return [t0[a][cut:] or empty for a in p0]
+        if len(parts) == 2:
+            t0, t1 = texts
+            return [(t0[a] + t1[b])[cut:] or empty for a, b in zip(*parts)]
+        if len(parts) == 3:
+            t0, t1, t2 = texts
+            return [(t0[a] + t1[b] + t2[c])[cut:] or empty for a, b, c in zip(*parts)]
+        t0, t1, t2, t3 = texts
+        return [(t0[a] + t1[b] + t2[c] + t3[d])[cut:] or empty for a, b, c, d in zip(*parts)]
+
+    def _printed_parts(self, style: str, chunk: int, json_escaped: bool, lists: bool = True):
+        """Per chunk: the text tables, each element's index into each, the union sign's length, ∅'s text, ∅ in it.
+
+        Every non-empty text in the tables begins with the union sign (``cut`` characters);
+        there are at most four tables, as there are at most 64 regions.
+        """
         if style not in ("ascii", "unicode"):
             raise ValueError(f"style must be 'ascii' or 'unicode', got {style!r}")
         regions = self.regions
@@ -426,19 +476,8 @@ class HyperPowerSet(Sequence):
             masks = self.masks[start:start + chunk]
             minimal = masks & ~_lookup(cover_tables, masks)
             printed = _lookup(rank_tables, minimal)
-            parts = [((printed >> np.uint64(16 * j)) & mask16).tolist() for j in range(len(texts))]
-            if len(parts) == 1:
-                (t0,), (p0,) = texts, parts
-                yield [t0[a][cut:] or empty for a in p0]
-            elif len(parts) == 2:
-                t0, t1 = texts
-                yield [(t0[a] + t1[b])[cut:] or empty for a, b in zip(*parts)]
-            elif len(parts) == 3:
-                t0, t1, t2 = texts
-                yield [(t0[a] + t1[b] + t2[c])[cut:] or empty for a, b, c in zip(*parts)]
-            else:
-                t0, t1, t2, t3 = texts
-                yield [(t0[a] + t1[b] + t2[c] + t3[d])[cut:] or empty for a, b, c, d in zip(*parts)]
+            parts = [((printed >> np.uint64(16 * j)) & mask16).astype(np.intp) for j in range(len(texts))]
+            yield texts, [p.tolist() for p in parts] if lists else parts, cut, empty, bool((printed == 0).any())
 
     def mask_of(self, element: Union[Element, str]) -> int:
         """The region mask of an element (reduced under the model first)."""

@@ -1,5 +1,6 @@
 """The hyper-power set D^Θ under a model, and its Hasse diagram."""
 
+import json
 import re
 
 import networkx as nx
@@ -302,3 +303,22 @@ def test_lattices_and_graphs_beyond_the_limits_are_refused(monkeypatch):
     monkeypatch.setattr(lattice_module, "MAX_GRAPH_NODES", 10)
     with pytest.raises(LatticeTooLargeError, match="limit 10"):
         lattice_module.hyper_power_set(3).hasse_diagram()
+
+
+@given(frames(1, 4).flatmap(hybrid_cases))
+@settings(max_examples=25, deadline=None)
+def test_text_blocks_join_the_texts_of_the_elements(case):
+    lattice = hyper_power_set(case.model)
+    for style in ("ascii", "unicode"):
+        texts = list(lattice.strings(style))
+        assert texts == [e.format(style) for e in lattice]
+        # ∅ in the first block (another path) or not; separators with and without a union sign
+        for separator in ("\n", '",\n    "', " | ", " ∪ "):
+            for chunk in (1, 2, 7, 65536):
+                assert separator.join(lattice.text_blocks(separator, style, chunk)) == separator.join(texts)
+
+
+def test_text_blocks_escape_names_for_json():
+    lattice = hyper_power_set(Model.free(Frame(['a"b', "c\\d", "e"])))
+    text = "[" + ", ".join('"' + block + '"' for block in lattice.text_blocks('", "', json_escaped=True)) + "]"
+    assert json.loads(text) == list(lattice.strings())
