@@ -153,34 +153,6 @@ def check_lattice(text: str) -> None:
         assert data["count"] == len(data["elements"]) == len(set(data["elements"]))
 
 
-def check_lattice_stream(path: Path, count: int) -> None:
-    """``lattice --json`` in a file, read as a stream: the count, and that many element strings."""
-    separator = re.compile(r"[ \t\n\r]*(,?)[ \t\n\r]*")
-    decoder = json.JSONDecoder()
-    with open(path, encoding="utf-8") as f:
-        head = f.read(1 << 16)
-        start = head.find('"elements"')
-        assert start >= 0, head[:200]
-        buffer, pos = head, head.index("[", start) + 1
-        seen = 0
-        while True:
-            if len(buffer) - pos < 1 << 15:
-                buffer, pos = buffer[pos:] + f.read(1 << 20), 0
-            gap = separator.match(buffer, pos)
-            pos = gap.end()
-            assert pos < len(buffer), f"the output ends after {seen} elements"
-            if buffer[pos] == "]":
-                break
-            assert bool(gap.group(1)) == bool(seen), f"malformed list after {seen} elements"
-            value, pos = decoder.raw_decode(buffer, pos)
-            assert isinstance(value, str) and value, value
-            seen += 1
-        rest = buffer[pos + 1:] + f.read()
-    json.loads('{"x": []' + rest)
-    found = re.search(r'"count"\s*:\s*(\d+)', head[:start] + rest)
-    assert found and int(found.group(1)) == count == seen, (found and found.group(1), seen, count)
-
-
 # -- strategies ---------------------------------------------------------------------------------------------
 def _plain_name(name: str) -> bool:
     return not NOT_FINITE.fullmatch(name)

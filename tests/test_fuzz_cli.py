@@ -38,7 +38,6 @@ from tests.fuzz_strategies import (
     check_bba,
     check_finite_values,
     check_lattice,
-    check_lattice_stream,
     check_measures,
     check_number,
     check_probability,
@@ -502,14 +501,3 @@ def test_point8_lattice_6_json_starts_streaming_in_little_memory(tmp_path):
     assert len(elements) > 1000 and all(isinstance(e, str) and e for e in elements)
     found = re.search(r'"count"\s*:\s*(\d+)', text[:text.index('"elements"')])
     assert found is None or int(found.group(1)) == 7828353
-
-
-@pytest.mark.slow
-def test_point8_lattice_6_json_streamed(tmp_path):
-    out = tmp_path / "lattice6.json"
-    try:
-        result = run_capped(["lattice", "6", "--json"], tmp_path, timeout=600, stdout_file=out)
-        assert_contract(result, "ok")
-        check_lattice_stream(out, 7828353)
-    finally:
-        out.unlink(missing_ok=True)
