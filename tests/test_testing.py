@@ -258,7 +258,7 @@ def test_the_broken_rules_are_registered_like_any_other(broken_rules):
     ("broken_favours_the_first_source", "commutativity", r"combine\(m1, m2(, m3)?\) differs from combine\(m[23]"),
     ("broken_average_claimed_associative", "associativity", r"differs from combine\(combine\(m1, m2\), m3\)"),
     ("broken_extrapolates", "no negative mass", r"gives m\(.+\) = -"),
-    ("broken_reads_the_first_row_only", "batch = row by row", r"row 1 of the combined batches differs"),
+    ("broken_reads_the_first_row_only", "batch = row by row", r"row [1-9][0-9]* of the combined batches differs"),
     ("broken_refuses_one_order", "commutativity", r"is refused \(InvalidMassError: the first source must not be "
                                                   r"categorical\) but combine\(.+\) is \{"),
 ])
