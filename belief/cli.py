@@ -14,13 +14,14 @@ command line ends with one line and status 2.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from collections.abc import Sequence
 from importlib.metadata import entry_points
 from typing import Any
 
-from belief.errors import BeliefError, FormatError
+from belief.errors import BeliefError, CombinationTooLargeError, FormatError
 from belief.frame import Frame
 from belief.lattice import check_lattice_size, hyper_power_set
 from belief.mass import MassFunction, check_cardinality_range
@@ -241,9 +242,54 @@ def _cmd_combine(args: argparse.Namespace) -> int:
     for k, source in enumerate(sources[1:], start=2):
         if source.model != sources[0].model:
             raise FormatError(f"{args.bba[k - 1]} was elicited under another frame or model than {args.bba[0]}")
-    result = combine(*sources, rule=info, model=model, **options)
+    raised = {name: value for name, value in ((name, getattr(args, flag.replace("-", "_")))
+                                              for flag, name in LIMIT_FLAGS.items()) if value is not None}
+    try:
+        with _limits(raised):
+            result = combine(*sources, rule=info, model=model, **options)
+    except CombinationTooLargeError as exc:
+        flag = next((f for f, name in LIMIT_FLAGS.items() if exc.limit == name), None)
+        if flag is None:
+            raise
+        raise CombinationTooLargeError(str(exc).replace(f"or raise {exc.limit}", f"or raise it with --{flag} N"),
+                                       exc.limit) from None
     _print_mass(result, args.json)
     return 0
+
+
+#: The options of ``belief combine`` that raise (or lower) a limit of a combination, and the limit each sets.
+LIMIT_FLAGS = {"max-tuples": "belief.plan.MAX_TUPLES", "max-work": "belief.plan.MAX_WORK",
+               "max-bytes": "belief.plan.MAX_BYTES", "max-element-tuples": "belief.plan.MAX_ELEMENT_TUPLES",
+               "max-plus-tuples": "belief.extra_rules.MAX_PLUS_TUPLES"}
+
+
+def _limit_value(text: str) -> int:
+    """A limit given on the command line: a positive whole number, as ``4000000``, ``4_000_000`` or ``4e6``."""
+    try:
+        value = float(text.replace("_", "")) if any(c in text for c in ".eE") else int(text.replace("_", ""))
+    except ValueError:
+        value = None
+    if value is None or not 0 < value < 2**63 or value != int(value):
+        raise argparse.ArgumentTypeError(f"a limit must be a positive whole number below 2**63, got {text!r}")
+    return int(value)
+
+
+@contextlib.contextmanager
+def _limits(values: dict):
+    """Set limits of :mod:`belief.plan` and :mod:`belief.extra_rules` (full names) for the time of the block."""
+    import importlib
+
+    saved = []
+    try:
+        for name, value in values.items():
+            module_name, attribute = name.rsplit(".", 1)
+            module = importlib.import_module(module_name)
+            saved.append((module, attribute, getattr(module, attribute)))
+            setattr(module, attribute, value)
+        yield
+    finally:
+        for module, attribute, value in reversed(saved):
+            setattr(module, attribute, value)
 
 
 def _cmd_rules(args: argparse.Namespace) -> int:
@@ -372,6 +418,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--r-mode", choices=["paper", "euclid", "jousselme"], help="r_rule: how R is measured")
     p.add_argument("--empty-mode", choices=["union", "empty"], help="r_rule: where R·k goes when A∩B is empty")
     p.add_argument("--json", action="store_true", help="print the result as a BBA file")
+    for flag, name in LIMIT_FLAGS.items():
+        p.add_argument(f"--{flag}", type=_limit_value, metavar="N",
+                       help=f"raise (or lower) {name} for this combination (see the docs' Limits and errors page)")
     p.set_defaults(func=_cmd_combine)
 
     p = sub.add_parser("rules", help="list the combination rules", description="List the combination rules.")

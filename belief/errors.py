@@ -66,7 +66,16 @@ class CombinationTooLargeError(ResourceLimitError, InvalidMassError):
     ``MAX_WORK``, ``MAX_BYTES`` or ``MAX_ELEMENT_TUPLES``) and its estimate of the job.  It is
     also an :class:`InvalidMassError`, which such refusals used to be, so that code catching
     that keeps working.
+
+    Attributes
+    ----------
+    limit : str or None
+        The full name of the limit exceeded, e.g. ``"belief.plan.MAX_TUPLES"``.
     """
+
+    def __init__(self, message: str, limit: str | None = None) -> None:
+        super().__init__(message)
+        self.limit = limit
 
 
 class TotalConflictError(BeliefError, ArithmeticError):

@@ -374,7 +374,7 @@ def _pcr_plus(sources: Sequence[MassBatch], model: Model, rule: str) -> MassBatc
         raise CombinationTooLargeError(
             f"joint {rule} combination of {len(sources)} sources visits {count:,} tuples of focal elements, more than "
             f"belief.extra_rules.MAX_PLUS_TUPLES = {MAX_PLUS_TUPLES:,}; use fewer focal elements or sources, or raise "
-            "belief.extra_rules.MAX_PLUS_TUPLES")
+            "belief.extra_rules.MAX_PLUS_TUPLES", limit="belief.extra_rules.MAX_PLUS_TUPLES")
     check_joint(rule, [len(f) for f in focal], rows, "pcr", True, rule == "pcr5_plus")
     plan = _plus_plan(model, tuple(focal))
     out = np.empty((rows, len(plan.targets)))

@@ -611,7 +611,8 @@ def joint_cost(sizes: Sequence[int], rows: int = 1, kind: str = "pcr", pcr5: boo
 
 def _refuse(what: str, limit: str, value: int, unit: str = "") -> CombinationTooLargeError:
     return CombinationTooLargeError(f"{what}, more than belief.plan.{limit} = {value:,}{unit}; use fewer focal "
-                                    f"elements, sources or rows, or raise belief.plan.{limit}")
+                                    f"elements, sources or rows, or raise belief.plan.{limit}",
+                                    limit=f"belief.plan.{limit}")
 
 
 def check_joint(rule: str, sizes: Sequence[int], rows: int = 1, kind: str = "pcr", fast=True,

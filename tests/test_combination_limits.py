@@ -240,3 +240,31 @@ def test_combined_results_are_valid_inputs_again(rule, data):
     except TotalConflictError:
         return
     assert np.all(np.abs(fused.values.sum(axis=1) - 1.0) <= 1e-12)
+
+
+@pytest.mark.parametrize(("flag", "limit"), [("max-tuples", "MAX_TUPLES"), ("max-work", "MAX_WORK"),
+                                             ("max-bytes", "MAX_BYTES")])
+def test_the_command_line_sets_a_limit_for_one_combination(tmp_path, capsys, flag, limit):
+    paths = []
+    for k in range(14):            # 16,384 tuples: large enough for every limit to be checked
+        path = tmp_path / f"s{k}.json"
+        path.write_text(json.dumps({"frame": ["a", "b"], "model": {"type": "shafer"}, "mass": {"a": .5, "b": .5}}))
+        paths.append(str(path))
+    before = getattr(plan_module, limit)
+    # Lowered below the job: refused, and the message names the option.
+    assert main(["combine", "--rule", "pcr6", *paths, f"--{flag}", "2"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"belief.plan.{limit} = 2" in err and f"--{flag} N" in err
+    assert getattr(plan_module, limit) == before                  # restored after the command
+    assert main(["combine", "--rule", "pcr6", *paths, f"--{flag}", "1e9", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["mass"] == pytest.approx({"a": 0.5, "b": 0.5}, abs=1e-12)
+    assert getattr(plan_module, limit) == before
+
+
+@pytest.mark.parametrize("value", ["0", "-5", "1.5", "nan", "inf", "x", "1e30"])
+def test_a_bad_limit_on_the_command_line_is_one_line(tmp_path, capsys, value):
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps({"frame": ["a", "b"], "mass": {"a": 1.0}}))
+    assert main(["combine", "--rule", "pcr6", str(path), str(path), "--max-tuples", value]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--max-tuples" in err and "Traceback" not in err
