@@ -10,6 +10,7 @@ rows costs one matrix product and no Python loop per row.
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
@@ -567,6 +568,7 @@ class MassBatch:
         TotalConflictError
             If a row has m(∅) = 1.
         """
+        check_cardinality_range(self, "BetP")
         plan, single = self._plan(queries)
         return self._finish(self._normal_values("BetP") @ plan.ratio, single, select)
 
@@ -581,6 +583,7 @@ class MassBatch:
         epsilon = float(epsilon)
         if not math.isfinite(epsilon) or epsilon < 0:
             raise UndefinedTransformError(f"DSmP needs a finite ε ≥ 0, got {epsilon!r}")
+        check_cardinality_range(self, "DSmP", epsilon)
         plan, single = self._plan(queries)
         m = self._normal_values("DSmP")
         numerator = np.einsum("nz,zxa->nxa", m, plan.unit_in_meet) + epsilon * plan.meet_cardinality[None]
@@ -687,3 +690,56 @@ def check_refines(old: Model, new: Model) -> None:
             f"the {new.kind} model is not stricter than the {old.kind} model: it allows "
             f"{', '.join(allowed)}, which the source model declares empty"
         )
+
+
+def check_cardinality_range(mass: Union[MassBatch, "MassFunction"], what: str,
+                            epsilon: float | None = None) -> None:
+    """Refuse a transformation whose DSm cardinalities, or ε times them, do not fit a float.
+
+    BetP and DSmP divide by C_M(X) (DSmP by m(X's singletons) + ε C_M(X)) in floating point;
+    past the largest float (about 1.8e308) the quotient would come out as 0 or NaN instead
+    of the right value.  C_M(X) ≤ 2^n - 1, so frames of fewer than 1 023 hypotheses with
+    ε ≤ 1 pass without computing anything.
+
+    Raises
+    ------
+    UndefinedTransformError
+        Naming the focal element, its cardinality and, for DSmP, the largest usable ε.
+    """
+    if epsilon is not None:
+        try:
+            epsilon = float(epsilon)
+        except (TypeError, ValueError, OverflowError):
+            return                      # MassBatch.dsmp names the bad ε
+        if not math.isfinite(epsilon) or epsilon < 0:
+            return
+    model = mass.model
+    if len(model.frame) < 1023 and (epsilon is None or epsilon <= 1.0):
+        return
+    biggest, focal = max((model.cardinality(x), i) for i, x in enumerate(mass.focal))
+    x = mass.focal[focal]
+    if biggest.bit_length() > 1023:
+        raise UndefinedTransformError(
+            f"{what} is out of floating-point range: the DSm cardinality of {_short(str(x))} under the "
+            f"{model.kind} model of {len(model.frame):,} hypotheses is about 2^{biggest.bit_length() - 1}, more "
+            "than the largest float (about 2^1024); use Shafer's model or constraints that leave fewer Venn regions"
+        )
+    if epsilon is not None and not math.isfinite(epsilon * float(biggest)):
+        raise UndefinedTransformError(
+            f"DSmP with ε = {epsilon:g} is out of floating-point range: ε·C({_short(str(x))}) = "
+            f"{epsilon:g}·{biggest} exceeds the largest float, and the shares of that element would be lost; "
+            f"use ε ≤ {_largest_epsilon(biggest):.6g} (as ε grows DSmP tends to BetP)"
+        )
+
+
+def _largest_epsilon(cardinality: int) -> float:
+    """The largest ε whose product with ``cardinality`` is a finite float."""
+    epsilon = sys.float_info.max / cardinality
+    while not math.isfinite(epsilon * float(cardinality)):
+        epsilon = math.nextafter(epsilon, 0.0)
+    return epsilon
+
+
+def _short(text: str) -> str:
+    """A proposition as a message quotes it: whole if short and printable, else abbreviated by repr."""
+    return repr(text) if len(text) <= 60 and text.isprintable() else repr(text[:57]) + "..."

@@ -10,14 +10,13 @@ from __future__ import annotations
 import json
 import math
 import reprlib
-import sys
 from collections.abc import Iterator, Mapping
 from typing import Any, Union
 
 import numpy as np
 
-from belief.batch import SUM_TOLERANCE, MassBatch, check_masses, resolve_model
-from belief.errors import FormatError, InvalidMassError, UndefinedTransformError
+from belief.batch import SUM_TOLERANCE, MassBatch, check_cardinality_range, check_masses, resolve_model
+from belief.errors import FormatError, InvalidMassError
 from belief.frame import Element, Frame, make_elements
 from belief.model import Model
 from belief.plan import RANK_TABLE_WIDTH, union_elements, union_ranks
@@ -715,48 +714,3 @@ _show.maxstring = 60
 _show.maxother = 60
 
 
-def check_cardinality_range(mass: MassFunction, what: str, epsilon: float | None = None) -> None:
-    """Refuse a transformation whose DSm cardinalities, or ε times them, do not fit a float.
-
-    BetP and DSmP divide by C_M(X) (DSmP by m(X's singletons) + ε C_M(X)) in floating point;
-    past the largest float (about 1.8e308) the quotient would come out as 0 or NaN instead
-    of the right value.  C_M(X) ≤ 2^n - 1, so frames of fewer than 1 023 hypotheses with
-    ε ≤ 1 pass without computing anything.
-
-    Raises
-    ------
-    UndefinedTransformError
-        Naming the focal element, its cardinality and, for DSmP, the largest usable ε.
-    """
-    if epsilon is not None:
-        try:
-            epsilon = float(epsilon)
-        except (TypeError, ValueError, OverflowError):
-            return                      # MassBatch.dsmp names the bad ε
-        if not math.isfinite(epsilon) or epsilon < 0:
-            return
-    model = mass.model
-    if len(model.frame) < 1023 and (epsilon is None or epsilon <= 1.0):
-        return
-    biggest, focal = max((model.cardinality(x), i) for i, x in enumerate(mass.focal))
-    x = mass.focal[focal]
-    if biggest.bit_length() > 1023:
-        raise UndefinedTransformError(
-            f"{what} is out of floating-point range: the DSm cardinality of {_show.repr(str(x))} under the "
-            f"{model.kind} model of {len(model.frame):,} hypotheses is about 2^{biggest.bit_length() - 1}, more "
-            "than the largest float (about 2^1024); use Shafer's model or constraints that leave fewer Venn regions"
-        )
-    if epsilon is not None and not math.isfinite(epsilon * float(biggest)):
-        raise UndefinedTransformError(
-            f"DSmP with ε = {epsilon:g} is out of floating-point range: ε·C({_show.repr(str(x))}) = "
-            f"{epsilon:g}·{biggest} exceeds the largest float, and the shares of that element would be lost; "
-            f"use ε ≤ {_largest_epsilon(biggest):.6g} (as ε grows DSmP tends to BetP)"
-        )
-
-
-def _largest_epsilon(cardinality: int) -> float:
-    """The largest ε whose product with ``cardinality`` is a finite float."""
-    epsilon = sys.float_info.max / cardinality
-    while not math.isfinite(epsilon * float(cardinality)):
-        epsilon = math.nextafter(epsilon, 0.0)
-    return epsilon

@@ -19,9 +19,9 @@ from belief import (
     UndefinedTransformError,
     hyper_power_set,
 )
+from belief.batch import _largest_epsilon
 from belief.cli import main
 from belief.frame import MAX_PROPOSITION_TERMS, reduce_terms, term_key
-from belief.mass import _largest_epsilon
 from belief.model import MAX_LISTED_CONSTRAINTS
 from belief.textfiles import load_json
 
@@ -362,3 +362,19 @@ def test_lattice_strings_match_the_elements():
         lattice = hyper_power_set(model)
         assert list(lattice.strings()) == [str(e) for e in lattice]
         assert list(lattice.strings("unicode", chunk=7)) == [e.format("unicode") for e in lattice]
+
+
+def test_batch_betp_and_dsmp_refuse_cardinalities_beyond_floats():
+    # The same refusal as MassFunction's, on the batch API that the tracker and the engine use.
+    import numpy as np
+
+    from belief import MassBatch, UndefinedTransformError
+
+    huge = MassBatch(["h1|h2", "h3"], np.array([[0.5, 0.5]]), model=Model.free(Frame([f"h{i}" for i in range(1030)])))
+    for call in (huge.pignistic, lambda: huge.betp(["h1"]), lambda: huge.dsmp(["h1"])):
+        with pytest.raises(UndefinedTransformError, match="out of floating-point range"):
+            call()
+    small = MassBatch(["a|b", "c"], np.array([[0.5, 0.5]]), model=Model.shafer(Frame(["a", "b", "c"])))
+    with pytest.raises(UndefinedTransformError, match=r"use ε ≤ 8\.98\d*e\+307"):
+        small.dsmp(["a"], 1e308)
+    assert small.dsmp(["a"], 1e300)[0, 0] == pytest.approx(0.25)
