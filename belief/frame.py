@@ -30,7 +30,7 @@ __all__ = ["Frame", "Element", "reduce_terms", "term_key", "MAX_PROPOSITION_TERM
 
 #: A proposition whose normal form would have more conjunctions than this is refused by the parser:
 #: the normal form of an intersection of unions grows as the product of their sizes.
-MAX_PROPOSITION_TERMS = 1_000_000
+MAX_PROPOSITION_TERMS = 100_000
 
 _OPERATOR_CHARS = set("()&|∩∪∅,")
 _RESERVED_NAMES = {"empty", "∅"}

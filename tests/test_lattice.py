@@ -306,7 +306,7 @@ def test_lattices_and_graphs_beyond_the_limits_are_refused(monkeypatch):
 
 
 @given(frames(1, 4).flatmap(hybrid_cases))
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=10, deadline=None)
 def test_text_blocks_join_the_texts_of_the_elements(case):
     lattice = hyper_power_set(case.model)
     for style in ("ascii", "unicode"):
