@@ -9,6 +9,9 @@ frames and writes a Motion-JPEG ``.avi``.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
 import time
 from collections.abc import Iterator, Sequence
 from os import PathLike
@@ -33,7 +36,8 @@ class VideoReader:
     corrupt frame: the frames after it cannot be numbered with certainty); :attr:`decoded`
     then tells how many frames came out, to compare with :attr:`frame_count`.  FFmpeg's own
     messages about the broken data are kept off standard error
-    (:data:`belief_tracking.extras.FFMPEG_QUIET`).
+    (:data:`belief_tracking.extras.FFMPEG_QUIET`), and so are those that OpenCV's other
+    readers write straight to it while they try a file that FFmpeg refused.
 
     Parameters
     ----------
@@ -60,7 +64,8 @@ class VideoReader:
             raise VideoError(f"cannot read video {self.path!r}: no such file")
         if file.is_dir():
             raise VideoError(f"cannot read video {self.path!r}: it is a directory")
-        self._capture = cv2.VideoCapture(self.path)
+        with _quiet_native_stderr():
+            self._capture = cv2.VideoCapture(self.path)
         if not self._capture.isOpened():
             raise VideoError(f"cannot read video {self.path!r}: OpenCV cannot open it (not a video, or an "
                              "unsupported codec)")
@@ -79,7 +84,8 @@ class VideoReader:
 
     def _read(self) -> np.ndarray | None:
         start = time.perf_counter()
-        ok, frame = self._capture.read()
+        with _quiet_native_stderr():
+            ok, frame = self._capture.read()
         self.decode_seconds += time.perf_counter() - start
         if not ok or frame is None:
             return None
@@ -110,6 +116,33 @@ class VideoReader:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+@contextlib.contextmanager
+def _quiet_native_stderr() -> Iterator[None]:
+    """Send what native code writes to file descriptor 2 to the null device for the time of the block.
+
+    OpenCV's readers of other containers (its Motion-JPEG AVI parser, for one) print to the
+    process's standard error when they meet a damaged file, past Python and past any log
+    level; the command line owes its user one line.  Python's own ``sys.stderr`` is left
+    alone, and nothing is silenced where descriptor 2 cannot be duplicated.
+    """
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError, AttributeError):
+        yield
+        return
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(null, 2)
+        finally:
+            os.close(null)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 class ImageSequenceReader:

@@ -14,7 +14,7 @@ import math
 import warnings
 
 import pytest
-from hypothesis import HealthCheck, event, given, settings
+from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 from belief.cli import main
@@ -125,3 +125,30 @@ def test_track_with_random_rows(tmp_path, capsys, scene_files, monkeypatch, rows
         text = (out / "tracks.txt").read_text(encoding="utf-8")
         rows = [[float(field) for field in line.split(",")] for line in text.splitlines() if line.strip()]
         assert all(len(row) == 10 and all(map(math.isfinite, row)) for row in rows), text[:500]
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(keep=st.floats(0.0, 1.0), corrupt=st.lists(st.tuples(st.floats(0.0, 1.0), st.binary(min_size=1, max_size=64)),
+                                                  max_size=3))
+@example(keep=0.001, corrupt=[])        # the header alone: OpenCV's Motion-JPEG reader printed to stderr
+def test_track_a_truncated_or_corrupt_video(tmp_path, capfd, scene_files, monkeypatch, keep, corrupt):
+    # capfd sees the decoder's own writes to the process's stderr too: none may pass.
+    from belief_tracking import outputs
+
+    monkeypatch.setattr(outputs, "plot_diagnostics", lambda path, *args, **kwargs: path.write_bytes(b"png"))
+    video, gt = scene_files
+    data = bytearray(video.read_bytes()[: int(len(video.read_bytes()) * keep)])
+    for where, junk in corrupt:
+        start = int(len(data) * where)
+        data[start:start + len(junk)] = junk
+    damaged_video = tmp_path / "damaged.avi"
+    damaged_video.write_bytes(bytes(data))
+    out = tmp_path / "run"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        status = main([str(a) for a in ["track", damaged_video, "--init-from-gt", gt, "--out", out, "--particles",
+                                        "20", "--no-progress", "--no-video"]])
+    err = capfd.readouterr().err
+    event(f"exit {status}")
+    check_contract(status, err)
+    assert status in (0, 1)
