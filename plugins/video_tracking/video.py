@@ -213,7 +213,8 @@ class ImageSequenceReader:
             data = np.fromfile(file, dtype=np.uint8)
         except OSError as exc:
             raise VideoError(f"cannot read image {file!r}: {exc.strerror or exc}") from None
-        image = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
+        with _quiet_native_stderr():     # OpenCV's warning about a damaged image: the error below says it
+            image = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
         self.decode_seconds += time.perf_counter() - start
         if image is None:
             raise VideoError(f"cannot read image {file!r}: OpenCV cannot decode it (not an image, or "

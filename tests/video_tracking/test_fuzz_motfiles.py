@@ -13,6 +13,7 @@ import json
 import math
 import warnings
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
@@ -152,3 +153,20 @@ def test_track_a_truncated_or_corrupt_video(tmp_path, capfd, scene_files, monkey
     event(f"exit {status}")
     check_contract(status, err)
     assert status in (0, 1)
+
+
+def test_a_damaged_image_in_a_folder_is_one_line(tmp_path, capfd):
+    # OpenCV's decoder warns on descriptor 2 ("PNG input buffer is incomplete"): only the error may show.
+    import cv2
+
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for k in range(1, 4):
+        cv2.imwrite(str(folder / f"{k:06d}.png"), np.full((60, 80, 3), 100, np.uint8))
+    damaged = folder / "000002.png"
+    damaged.write_bytes(damaged.read_bytes()[:60])
+    status = main(["track", str(folder), "--out", str(tmp_path / "run"), "--no-progress", "--no-video"])
+    err = capfd.readouterr().err
+    assert status == 1
+    check_contract(status, err)
+    assert "000002.png" in err
