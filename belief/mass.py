@@ -109,18 +109,7 @@ class MassFunction(_MassSlots):
                     if 0.0 in values:
                         masks = [m for m, v in zip(masks, values) if v > 0.0]
                         values = [v for v in values if v > 0.0]
-                    if type(self) is MassFunction:
-                        # Plain stores on the twin class (see _from_masks), then back to MassFunction.
-                        _set(self, "__class__", _FreshMass)
-                        self.model = model
-                        self._focal = self._values = self._batch = self._hash = None
-                        self._masks = masks
-                        self._floats = values
-                        self._loose = True
-                        self._memo = None
-                        self.__class__ = MassFunction
-                    else:
-                        self._set_unions(model, masks, values)
+                    self._set_unions(model, masks, values)
                     return
             if _spaced_unions(self, masses, model, bit):
                 return

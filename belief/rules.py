@@ -896,17 +896,26 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
     normalise = kind == "dempster" and 0 in groups
     if normalise:
         del groups[0]
-    focal = list(groups)
     sums = [group if type(group) is float else group[0] + group[1] if len(group) == 2 else fsum(group)
             for group in groups.values()]
+    return _pair_result(model, list(groups), sums, normalise, min(values1) * min(values2) > 0)
+
+
+def _pair_result(model: Model, focal: list, sums: list, normalise: bool, positive: bool) -> MassFunction | None:
+    """The mass function of a pair's sums per target: normalised for Dempster's rule, zeros dropped.
+
+    None where Dempster's normalisation would divide by a non-empty mass below
+    :data:`WIDE_SCALE` (underflow or total conflict: the general path tells which).
+    ``positive``: the product of the smallest masses of the two sources is positive.
+    """
     if normalise:
         scale = fsum(sums)
         if not scale > WIDE_SCALE:
-            return None                         # underflow or total conflict: the general path tells which
+            return None
         sums = [x / scale for x in sums]
     # Masses are positive: if the product of the smallest two is, so is every product, every sum
     # and every quotient by a scale of at most one (rounding is monotone), and no zero is dropped.
-    if not min(values1) * min(values2) > 0 and not all(x > 0 for x in sums):
+    if not positive and not all(x > 0 for x in sums):
         pairs = [(f, x) for f, x in zip(focal, sums) if x > 0]
         return MassFunction._from_masks(model, [f for f, _ in pairs], [x for _, x in pairs], True)
     return MassFunction._from_masks(model, focal, sums, True)
@@ -941,16 +950,10 @@ def _pair_from_table(model: Model, kind: str, table: tuple, values1, values2) ->
             sums.append(fsum(products[start:start + size]))
         start += size
     focal = list(focal)
-    if kind == "dempster" and empty is not None:
+    normalise = kind == "dempster" and empty is not None
+    if normalise:
         del focal[empty], sums[empty]
-        scale = fsum(sums)
-        if not scale > WIDE_SCALE:
-            return None                         # underflow or total conflict: the general path tells which
-        sums = [x / scale for x in sums]
-    if not min(values1) * min(values2) > 0 and not all(x > 0 for x in sums):
-        pairs = [(f, x) for f, x in zip(focal, sums) if x > 0]
-        return MassFunction._from_masks(model, [f for f, _ in pairs], [x for _, x in pairs], True)
-    return MassFunction._from_masks(model, focal, sums, True)
+    return _pair_result(model, focal, sums, normalise, min(values1) * min(values2) > 0)
 
 
 def _pcr_joint_loop(model: Model, rule: str, masks: list, values: list) -> MassFunction:
