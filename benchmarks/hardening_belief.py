@@ -25,22 +25,15 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import re
-import resource
 import shutil
-import signal
-import subprocess
 import sys
 import tempfile
-import threading
-import time
 from pathlib import Path
 from typing import Callable, NamedTuple, Optional
 
-CLI = [sys.executable, "-c", "import sys; from belief.cli import main; sys.exit(main())"]
-LIMIT_SECONDS = 10.0
-LIMIT_BYTES = 1 << 30
+from process_usage import LIMIT_BYTES, LIMIT_SECONDS, Usage, run_cli
+
 KILL_SECONDS = 60.0
 ADDRESS_SPACE = 4 << 30
 NOT_FINITE = re.compile(r"(?<![\w.])-?(nan|inf|infinity)(?![\w.])", re.IGNORECASE)
@@ -53,54 +46,6 @@ class Step(NamedTuple):
     out: str                      # standard output goes to this file of the folder
     expected: str                 # 'ok', 'error' or 'either'
     check: Optional[Check] = None  # a success's output, checked: None or the problem
-
-
-class Result(NamedTuple):
-    status: int
-    stderr: str
-    seconds: float
-    peak: int
-    killed: bool
-
-
-def maxrss_bytes(usage: resource.struct_rusage) -> int:
-    """ru_maxrss in bytes (it is in KiB on Linux, in bytes on macOS)."""
-    return usage.ru_maxrss if sys.platform == "darwin" else usage.ru_maxrss * 1024
-
-
-def _running(pid: int) -> bool:
-    """Whether the child is still running, without reaping it (so that wait4 can read its usage)."""
-    return os.waitid(os.P_PID, pid, os.WEXITED | os.WNOHANG | os.WNOWAIT) is None
-
-
-def _cap() -> None:
-    resource.setrlimit(resource.RLIMIT_AS, (ADDRESS_SPACE, ADDRESS_SPACE))
-
-
-def run(argv: list, folder: Path, out: str) -> Result:
-    """Run the command line with standard output to ``folder/out``; kill it after KILL_SECONDS."""
-    started = time.perf_counter()
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
-    with open(folder / out, "wb") as stdout:
-        process = subprocess.Popen([*CLI, *[str(a) for a in argv]], cwd=folder, stdout=stdout,
-                                   stderr=subprocess.PIPE, env=env, preexec_fn=_cap)
-        chunks: list[bytes] = []
-        reader = threading.Thread(target=lambda: chunks.append(process.stderr.read()))
-        reader.start()
-        killed = False
-        while _running(process.pid):
-            if time.perf_counter() - started > KILL_SECONDS:
-                process.send_signal(signal.SIGKILL)
-                killed = True
-                break
-            time.sleep(0.02)
-        _, status, usage = os.wait4(process.pid, 0)
-        seconds = time.perf_counter() - started
-        process.returncode = os.waitstatus_to_exitcode(status)
-        reader.join()
-        process.stderr.close()
-    return Result(process.returncode, b"".join(chunks).decode("utf-8", "replace"), seconds,
-                  maxrss_bytes(usage), killed)
 
 
 # -- checks of a success's output --------------------------------------------------------------------
@@ -347,7 +292,7 @@ def _slug(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_")
 
 
-def verdict(step: Step, result: Result, folder: Path) -> list[str]:
+def verdict(step: Step, result: Usage, folder: Path) -> list[str]:
     """The problems of one step's run (an empty list: PASS)."""
     problems = []
     lines = result.stderr.splitlines()
@@ -397,7 +342,8 @@ def main() -> int:
         for name, steps in selected:
             seconds, peak, problems, status, first_line, count = 0.0, 0, [], 0, "", 0
             for step in steps:
-                result = run(step.argv, folder, step.out)
+                result = run_cli(step.argv, folder, stdout=folder / step.out, kill_after=KILL_SECONDS,
+                                 address_space=ADDRESS_SPACE)
                 seconds += result.seconds
                 peak = max(peak, result.peak)
                 status, lines = result.status, result.stderr.splitlines()

@@ -17,59 +17,13 @@ from __future__ import annotations
 
 import argparse
 import os
-import resource
 import shutil
-import signal
 import socket
-import subprocess
 import sys
 import tempfile
-import threading
-import time
 from pathlib import Path
 
-CLI = [sys.executable, "-c", "import sys; from belief.cli import main; sys.exit(main())"]
-LIMIT_SECONDS = 10.0
-LIMIT_BYTES = 1 << 30
-
-
-def maxrss_bytes(usage: resource.struct_rusage) -> int:
-    """ru_maxrss in bytes (it is in KiB on Linux, in bytes on macOS)."""
-    return usage.ru_maxrss if sys.platform == "darwin" else usage.ru_maxrss * 1024
-
-
-def _running(pid: int) -> bool:
-    """Whether the child is still running, without reaping it (so that wait4 can read its usage)."""
-    return os.waitid(os.P_PID, pid, os.WEXITED | os.WNOHANG | os.WNOWAIT) is None
-
-
-def run(argv: list, folder: Path, terminate_when: Path | None = None) -> tuple[int, str, float, int]:
-    """Run the command line; returns the exit status, stderr, wall seconds and the peak memory in bytes.
-
-    The peak is the child's own ru_maxrss, from wait4 (the rusage that
-    ``resource.getrusage(RUSAGE_CHILDREN)`` accumulates, for this child alone).  With
-    ``terminate_when``, SIGTERM is sent once that file exists.
-    """
-    started = time.perf_counter()
-    process = subprocess.Popen([*CLI, *[str(a) for a in argv]], cwd=folder, stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True)
-    streams: dict[str, str] = {}
-    readers = [threading.Thread(target=lambda name=name: streams.__setitem__(name, getattr(process, name).read()))
-               for name in ("stdout", "stderr")]
-    for reader in readers:
-        reader.start()
-    if terminate_when is not None:
-        while not terminate_when.exists() and _running(process.pid) and time.perf_counter() - started < 60:
-            time.sleep(0.01)
-        if _running(process.pid):
-            process.send_signal(signal.SIGTERM)
-    _, status, usage = os.wait4(process.pid, 0)
-    seconds = time.perf_counter() - started
-    process.returncode = os.waitstatus_to_exitcode(status)
-    for reader in readers:
-        reader.join()
-    return process.returncode, streams["stderr"], seconds, maxrss_bytes(usage)
-
+from process_usage import LIMIT_BYTES, LIMIT_SECONDS, run_cli
 
 def free_port() -> int:
     with socket.socket() as s:
@@ -79,7 +33,7 @@ def free_port() -> int:
 
 def prepare(folder: Path) -> None:
     """The demo scene, a truncated copy, and the hostile files of the cases."""
-    status, err, _, _ = run(["track", "--demo", "--out", "d", "--no-progress", "--no-video"], folder)
+    status, err = run_cli(["track", "--demo", "--out", "d", "--no-progress", "--no-video"], folder)[:2]
     if status != 0:
         sys.exit(f"cannot render the demo scene: {err}")
     video = (folder / "d" / "scene.avi").read_bytes()
@@ -136,11 +90,12 @@ def main() -> int:
         prepare(folder)
         print(f"{'case':38} {'exit':>4} {'stderr':>6} {'seconds':>8} {'peak MB':>8}  verdict")
         failed = 0
-        for name, argv, expected, trigger in cases(folder):
-            status, err, seconds, peak = run(argv, folder, trigger)
+        selected = cases(folder)
+        for name, argv, expected, trigger in selected:
+            status, err, seconds, peak, killed = run_cli(argv, folder, terminate_when=trigger)
             lines = err.splitlines()
             leftovers = [str(p.relative_to(folder)) for p in folder.rglob(".*.partial*")]
-            problems = []
+            problems = ["killed after 60 s"] if killed else []
             if seconds > LIMIT_SECONDS:
                 problems.append(f"> {LIMIT_SECONDS:g} s")
             if peak > LIMIT_BYTES:
@@ -158,7 +113,7 @@ def main() -> int:
             print(f"{name:38} {status:>4} {len(lines):>6} {seconds:>8.2f} {peak / 2**20:>8.0f}  {verdict}")
             if lines:
                 print(f"    {lines[0][:150]}")
-        print(f"{failed} of {len(cases(folder))} cases failed")
+        print(f"{failed} of {len(selected)} cases failed")
         return 1 if failed else 0
     finally:
         if not args.keep:
