@@ -190,9 +190,7 @@ def test_detections_past_a_length_announced_wrongly_are_refused_after_the_run(tm
     assert not out.exists()
 
 
-def test_an_output_folder_holds_the_files_of_its_latest_run_only(tmp_path, plan, monkeypatch):
-    # diagnostics.png as a stub: drawing the real one costs seconds and is tested with the demo
-    monkeypatch.setattr(outputs, "plot_diagnostics", lambda path, *args, **kwargs: Path(path).write_bytes(b"png"))
+def test_an_output_folder_holds_the_files_of_its_latest_run_only(tmp_path, plan, quick_plot):
     out = tmp_path / "out"
     out.mkdir()
     mine = Path(out / "notes.txt")

@@ -8,7 +8,6 @@ bad experiment arguments.  Each ends in exactly one line on standard error and n
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import os
 import signal
@@ -22,28 +21,9 @@ import numpy as np
 import pytest
 
 from belief.cli import main
-from belief_tracking import scenes
 
 STAGED = ".*.partial*"
 CLI = "import sys; from belief.cli import main; sys.exit(main())"
-
-
-@pytest.fixture(scope="module")
-def scene_files(tmp_path_factory):
-    """A short crossing scene (12 frames) as scene.avi and gt.txt."""
-    folder = tmp_path_factory.mktemp("scene")
-    scene = scenes.render(dataclasses.replace(scenes.crossing(0), n_frames=12))
-    scenes.write_video(folder / "scene.avi", scene)
-    scenes.write_gt(folder / "gt.txt", scene.ground_truth, visibility=scene.visibility)
-    return folder / "scene.avi", folder / "gt.txt"
-
-
-@pytest.fixture
-def quick_plot(monkeypatch):
-    """diagnostics.png as a stub: drawing the real one costs seconds and is tested with the demo."""
-    from belief_tracking import outputs
-
-    monkeypatch.setattr(outputs, "plot_diagnostics", lambda path, *args, **kwargs: Path(path).write_bytes(b"png"))
 
 
 def belief(argv: list[str], capsys) -> tuple[int, str, str]:

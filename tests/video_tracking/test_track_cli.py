@@ -233,13 +233,6 @@ def write_sequence(folder: Path, n_frames: int = 4, info: str | None = None) -> 
 DETECTIONS = "1,-1,21,11,10,20,0.9,-1,-1,-1\n3,-1,22,11,10,20,0.8,-1,-1,-1\n"
 
 
-@pytest.fixture
-def quick_plot(monkeypatch):
-    """diagnostics.png as a stub: drawing the real one costs seconds and is tested with the demo."""
-    from belief_tracking import outputs
-
-    monkeypatch.setattr(outputs, "plot_diagnostics", lambda path, *args, **kwargs: Path(path).write_bytes(b"png"))
-
 BAD_SOURCES = {
     "detections: malformed line": ("det", "1,-1,21,11,10,20,0.9\n2,-1,21,11,10,20\n",
                                    "det.txt, line 2: expected at least 7 fields"),

@@ -1,0 +1,28 @@
+"""Fixtures shared by the tracking tests."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import pytest
+
+
+@pytest.fixture(scope="module")
+def scene_files(tmp_path_factory):
+    """A short crossing scene (12 frames of 320 x 240) as scene.avi and gt.txt."""
+    from belief_tracking import scenes
+
+    folder = tmp_path_factory.mktemp("scene")
+    scene = scenes.render(dataclasses.replace(scenes.crossing(0), n_frames=12))
+    scenes.write_video(folder / "scene.avi", scene)
+    scenes.write_gt(folder / "gt.txt", scene.ground_truth, visibility=scene.visibility)
+    return folder / "scene.avi", folder / "gt.txt"
+
+
+@pytest.fixture
+def quick_plot(monkeypatch):
+    """diagnostics.png as a stub: drawing the real one costs seconds and is tested with the demo."""
+    from belief_tracking import outputs
+
+    monkeypatch.setattr(outputs, "plot_diagnostics", lambda path, *args, **kwargs: Path(path).write_bytes(b"png"))
