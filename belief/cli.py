@@ -242,15 +242,13 @@ def _cmd_combine(args: argparse.Namespace) -> int:
     for k, source in enumerate(sources[1:], start=2):
         if source.model != sources[0].model:
             raise FormatError(f"{args.bba[k - 1]} was elicited under another frame or model than {args.bba[0]}")
-    raised = {name: value for name, value in ((name, getattr(args, flag.replace("-", "_")))
-                                              for flag, name in LIMIT_FLAGS.items()) if value is not None}
+    given = {name: getattr(args, flag.replace("-", "_")) for flag, name in LIMIT_FLAGS.items()}
     try:
-        with _limits(raised):
+        with _limits({name: value for name, value in given.items() if value is not None}):
             result = combine(*sources, rule=info, model=model, **options)
     except CombinationTooLargeError as exc:
-        flag = next((f for f, name in LIMIT_FLAGS.items() if exc.limit == name), None)
-        if flag is None:
-            raise
+        # Every limit has its option: the command line's user is told that, not a module attribute.
+        flag = next(f for f, name in LIMIT_FLAGS.items() if name == exc.limit)
         raise CombinationTooLargeError(str(exc).replace(f"or raise {exc.limit}", f"or raise it with --{flag} N"),
                                        exc.limit) from None
     _print_mass(result, args.json)

@@ -268,3 +268,22 @@ def test_a_bad_limit_on_the_command_line_is_one_line(tmp_path, capsys, value):
     assert main(["combine", "--rule", "pcr6", str(path), str(path), "--max-tuples", value]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--max-tuples" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize(("flag", "module", "limit", "rule", "frame"), [
+    ("max-element-tuples", "belief.plan", "MAX_ELEMENT_TUPLES", "pcr6", {"frame": [f"t{k}" for k in range(7)]}),
+    ("max-plus-tuples", "belief.extra_rules", "MAX_PLUS_TUPLES", "pcr6_plus",
+     {"frame": ["a", "b"], "model": {"type": "shafer"}}),
+])
+def test_the_other_limits_have_their_options_too(tmp_path, capsys, flag, module, limit, rule, frame):
+    # The free model of seven hypotheses combines element by element; PCR6+ has a limit of its own.
+    first, second = frame["frame"][:2]
+    paths = []
+    for k in range(3):
+        path = tmp_path / f"s{k}.json"
+        path.write_text(json.dumps({**frame, "mass": {first: 0.5, f"{first}|{second}": 0.5}}))
+        paths.append(str(path))
+    assert main(["combine", "--rule", rule, *paths, f"--{flag}", "2"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{module}.{limit} = 2" in err and f"--{flag} N" in err
+    assert main(["combine", "--rule", rule, *paths, f"--{flag}", "1000"]) == 0

@@ -188,3 +188,17 @@ def test_experiment_dry_run_of_random_configurations(tmp_path, capsys, config):
     check_contract(status, err)
     if status == 0:
         assert "runs" in out
+
+
+def test_a_video_is_read_where_stderr_cannot_be_redirected(scene_files, monkeypatch):
+    # Without a descriptor to duplicate (an embedding that closed it), the decoder's noise is let through.
+    import os
+
+    from belief_tracking.video import VideoReader
+
+    def no_dup(fd):
+        raise OSError("no descriptor")
+
+    monkeypatch.setattr(os, "dup", no_dup)
+    with VideoReader(scene_files[0]) as reader:
+        assert sum(1 for _ in reader) == 12
