@@ -20,7 +20,7 @@ import numpy as np
 
 from belief.errors import FrameError, InvalidMassError, TotalConflictError, UndefinedTransformError
 from belief.frame import Element, Frame
-from belief.model import Model
+from belief.model import Model, _show
 
 if TYPE_CHECKING:
     from belief.mass import MassFunction
@@ -720,13 +720,13 @@ def check_cardinality_range(mass: Union[MassBatch, "MassFunction"], what: str,
     x = mass.focal[focal]
     if biggest.bit_length() > 1023:
         raise UndefinedTransformError(
-            f"{what} is out of floating-point range: the DSm cardinality of {_short(str(x))} under the "
+            f"{what} is out of floating-point range: the DSm cardinality of {_show.repr(str(x))} under the "
             f"{model.kind} model of {len(model.frame):,} hypotheses is about 2^{biggest.bit_length() - 1}, more "
             "than the largest float (about 2^1024); use Shafer's model or constraints that leave fewer Venn regions"
         )
     if epsilon is not None and not math.isfinite(epsilon * float(biggest)):
         raise UndefinedTransformError(
-            f"DSmP with ε = {epsilon:g} is out of floating-point range: ε·C({_short(str(x))}) = "
+            f"DSmP with ε = {epsilon:g} is out of floating-point range: ε·C({_show.repr(str(x))}) = "
             f"{epsilon:g}·{biggest} exceeds the largest float, and the shares of that element would be lost; "
             f"use ε ≤ {_largest_epsilon(biggest):.6g} (as ε grows DSmP tends to BetP)"
         )
@@ -739,7 +739,3 @@ def _largest_epsilon(cardinality: int) -> float:
         epsilon = math.nextafter(epsilon, 0.0)
     return epsilon
 
-
-def _short(text: str) -> str:
-    """A proposition as a message quotes it: whole if short and printable, else abbreviated by repr."""
-    return repr(text) if len(text) <= 60 and text.isprintable() else repr(text[:57]) + "..."

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import math
-import reprlib
 from collections.abc import Iterator, Mapping
 from typing import Any, Union
 
@@ -18,7 +17,7 @@ import numpy as np
 from belief.batch import SUM_TOLERANCE, MassBatch, check_cardinality_range, check_masses, resolve_model
 from belief.errors import FormatError, InvalidMassError
 from belief.frame import Element, Frame, make_elements
-from belief.model import Model
+from belief.model import Model, _show
 from belief.plan import RANK_TABLE_WIDTH, union_elements, union_ranks
 from belief.textfiles import load_json
 
@@ -695,11 +694,5 @@ def _key_text(key: Any) -> str:
     text = str(key)
     return text if len(text) <= 60 and text.isprintable() else _show.repr(text)
 
-
-# Messages quote user data cut short (and shallow), so that they stay one line.
-_show = reprlib.Repr()
-_show.maxlevel = 2
-_show.maxstring = 60
-_show.maxother = 60
 
 
