@@ -607,7 +607,7 @@ def check_rule(rule: Union[str, RuleInfo], *, associative: bool | None = None, c
     Claiming a law that does not hold: PCR6 is not associative.
 
     >>> try:
-    ...     check_rule("pcr6", associative=True, max_examples=20)
+    ...     check_rule("pcr6", associative=True, max_examples=100)
     ... except AssertionError as error:
     ...     print(str(error).splitlines()[0])
     associativity fails for rule 'pcr6': combine(m1, m2, m3) differs from combine(combine(m1, m2), m3)
