@@ -34,7 +34,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, fields
 from functools import lru_cache
-from typing import ClassVar, Protocol, runtime_checkable
+from typing import ClassVar, NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -58,6 +58,7 @@ __all__ = [
     "DetectionCue",
     "CUES",
     "make_cue",
+    "score_cues",
     "colour_bins",
     "orientation_bins",
     "kernel_grid",
@@ -666,30 +667,45 @@ def _grid_axes(samples: tuple[int, int]) -> tuple[np.ndarray, ...]:
 
 
 def _tiled_weights(samples: tuple[int, int], n_boxes: int) -> np.ndarray:
-    """The kernel weights of :func:`kernel_grid` repeated for ``n_boxes`` boxes, flat (n_boxes · S,), read-only."""
+    """The kernel weights of :func:`kernel_grid` for ``n_boxes`` boxes, sample-major and flat (S · n_boxes,).
+
+    Read-only; point s of box b is entry s · n_boxes + b, the order of :class:`_Sampling`.
+    """
     if n_boxes > HISTOGRAM_BLOCK:                        # not worth keeping
-        return np.tile(kernel_grid(samples)[1], n_boxes)
+        return np.repeat(kernel_grid(samples)[1], n_boxes)
     return _kept_tiled_weights(samples, n_boxes)
 
 
 @lru_cache(maxsize=8)
 def _kept_tiled_weights(samples: tuple[int, int], n_boxes: int) -> np.ndarray:
     """:func:`_tiled_weights` for a block of boxes, built once per block size."""
-    tiled = np.tile(kernel_grid(samples)[1], n_boxes)
+    tiled = np.repeat(kernel_grid(samples)[1], n_boxes)
     tiled.flags.writeable = False
     return tiled
 
 
-def _sample_pixels(centres: np.ndarray, box_sizes: np.ndarray, samples: tuple[int, int], shape: tuple[int, int],
-                   inside: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
-    """The flat pixel index of every sample point of every box, shape (n, S), and which lie in the image.
+class _Sampling(NamedTuple):
+    """Where the sample points of a block of n boxes fall, sample-major: point s of box b is at [s, b].
+
+    Sample-major rows are as long as the block, and a histogram count still adds the weights
+    of one box's points in the order of :func:`kernel_grid`, so nothing is transposed.
+    """
+
+    pixels: np.ndarray                  # (S, n) flat pixel index of every point
+    inside: np.ndarray | None           # (S, n) which points lie in the image; None: all, or not asked
+    weights: np.ndarray                 # (S · n,) kernel weight of every point, read-only
+    n_boxes: int
+    kernel_total: float                 # Σ_i k(r_i) over one box's points, the 1 / f of L (10)
+
+
+def _sample(centres: np.ndarray, box_sizes: np.ndarray, samples: tuple[int, int], shape: tuple[int, int],
+            inside: bool = False) -> _Sampling:
+    """The :class:`_Sampling` of the boxes at ``centres`` (n, 2) of sizes ``box_sizes`` (n, 2) in an image of ``shape``.
 
     A box's sample points form a grid, so the coordinates are computed per axis (across +
     down values per box rather than 2 S), each by the same floating-point expression as
-    point by point, and only the pixel indices are spread over the grid.  The work runs
-    sample-major, (S, n), where every row is as long as the block, and is turned box-major
-    at the end for the histogram counts.  The second array (None unless ``inside`` is asked,
-    and None when every point lies in the image) flags the points inside the image.
+    point by point, and only the pixel indices are spread over the grid.  Which points lie
+    in the image is found only when ``inside`` is asked (a mask counts the others out).
     """
     u, v, across_index, down_index = _grid_axes(samples)
     height, width = shape
@@ -703,49 +719,69 @@ def _sample_pixels(centres: np.ndarray, box_sizes: np.ndarray, samples: tuple[in
     rows *= width
     pixels = np.take(rows, down_index, axis=0)                                     # (S, n)
     pixels += np.take(columns, across_index, axis=0)
-    pixels = pixels.T.copy()                                                       # (n, S)
-    if not inside:
-        return pixels, None
-    within_x = (xs >= 0) & (xs < width)
-    within_y = (ys >= 0) & (ys < height)
-    if within_x.all() and within_y.all():
-        return pixels, None
-    within = np.take(within_y, down_index, axis=0) & np.take(within_x, across_index, axis=0)
-    return pixels, within.T
+    weights = _tiled_weights(samples, centres.shape[0])
+    within = None
+    if inside:
+        within_x = (xs >= 0) & (xs < width)
+        within_y = (ys >= 0) & (ys < height)
+        if not (within_x.all() and within_y.all()):
+            within = np.take(within_y, down_index, axis=0) & np.take(within_x, across_index, axis=0)
+    return _Sampling(pixels, within, weights, centres.shape[0], _kernel_total(samples))
 
 
-def _kernel_counts(bin_image: np.ndarray, centres: np.ndarray, box_sizes: np.ndarray, n_bins: int,
-                   samples: tuple[int, int], foreground: np.ndarray | None = None,
-                   pixel_weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | float]:
-    """The unnormalised histograms of :func:`kernel_histograms`, flat (n · B,), and their 1 / f.
+@lru_cache(maxsize=32)
+def _kernel_total(samples: tuple[int, int]) -> float:
+    """Σ_i k(r_i) over the points of :func:`kernel_grid`."""
+    return float(kernel_grid(samples)[1].sum())
+
+
+def _slots(bin_image: np.ndarray, sampling: _Sampling, width: int, compact: np.ndarray | None = None) -> np.ndarray:
+    """The histogram slot b · width + bin of every sample point, flat (S · n,).
+
+    ``compact`` (optional, shape (B,)) renumbers the bins into 0 … width − 1 first.
+    """
+    bins = np.take(np.ravel(bin_image), sampling.pixels)
+    if compact is not None:
+        bins = np.take(compact, bins)
+    return np.add(bins, np.arange(sampling.n_boxes, dtype=np.intp) * width, dtype=np.intp).ravel()
+
+
+def _counts(slots: np.ndarray, sampling: _Sampling, width: int, foreground: np.ndarray | None = None,
+            pixel_weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | float]:
+    """The unnormalised histograms of the sampled boxes, flat (n · width,), and their 1 / f.
 
     1 / f is a number without pixel weights, and one per box, shape (n, 1), with them (1 for
     a box without weight, whose counts are all 0).  Each count adds its sample weights in
     the order of :func:`kernel_grid`, so the counts are those of a point-by-point sum.
     """
-    if pixel_weights is not None and np.shape(pixel_weights) != np.shape(bin_image):
-        raise TrackingError(f"pixel_weights must have the shape {np.shape(bin_image)} of the bin image, "
-                            f"got {np.shape(pixel_weights)}")
-    samples = tuple(samples)
-    _, weights = kernel_grid(samples)
-    n_boxes = centres.shape[0]
-    pixels, inside = _sample_pixels(centres, box_sizes, samples, np.shape(bin_image), foreground is not None)
-    slots = np.add(np.take(np.ravel(bin_image), pixels), (np.arange(n_boxes, dtype=np.intp) * n_bins)[:, None],
-                   dtype=np.intp)                                                  # (n, S)
-    sample_weights = _tiled_weights(samples, n_boxes)
+    n_boxes = sampling.n_boxes
+    sample_weights = sampling.weights
     if pixel_weights is not None:
-        sample_weights = sample_weights * np.take(np.asarray(pixel_weights, dtype=np.float64).ravel(), pixels).ravel()
-        totals = sample_weights.reshape(n_boxes, -1).sum(axis=1)                  # 1 / f, box by box
+        sample_weights = sample_weights * np.take(np.ravel(pixel_weights), sampling.pixels).ravel()
+        totals = sample_weights.reshape(-1, n_boxes).sum(axis=0)                   # 1 / f, box by box
     if foreground is not None:
-        counted = np.take(np.ravel(foreground), pixels)
-        if inside is not None:
-            counted &= inside
+        counted = np.take(np.ravel(foreground), sampling.pixels)
+        if sampling.inside is not None:
+            counted &= sampling.inside
         sample_weights = sample_weights * counted.ravel()
-    counts = np.bincount(slots.ravel(), weights=sample_weights, minlength=n_boxes * n_bins)
+    counts = np.bincount(slots, weights=sample_weights, minlength=n_boxes * width)
     if pixel_weights is None:
-        return counts, weights.sum()                                               # f of L (10)
+        return counts, sampling.kernel_total                                       # f of L (10)
     # A box without any weight keeps its all-zero row rather than 0 / 0.
     return counts, np.where(totals > 0, totals, 1.0)[:, None]
+
+
+def _kernel_counts(bin_image: np.ndarray, centres: np.ndarray, box_sizes: np.ndarray, n_bins: int,
+                   samples: tuple[int, int], foreground: np.ndarray | None = None,
+                   pixel_weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | float]:
+    """The unnormalised histograms of :func:`kernel_histograms`, flat (n · B,), and their 1 / f (:func:`_counts`)."""
+    if pixel_weights is not None:
+        if np.shape(pixel_weights) != np.shape(bin_image):
+            raise TrackingError(f"pixel_weights must have the shape {np.shape(bin_image)} of the bin image, "
+                                f"got {np.shape(pixel_weights)}")
+        pixel_weights = np.asarray(pixel_weights, dtype=np.float64)
+    sampling = _sample(centres, box_sizes, tuple(samples), np.shape(bin_image), foreground is not None)
+    return _counts(_slots(bin_image, sampling, n_bins), sampling, n_bins, foreground, pixel_weights)
 
 
 def bhattacharyya(histograms: np.ndarray, references: np.ndarray) -> np.ndarray:
@@ -807,7 +843,10 @@ def _sparse_rho(counts: np.ndarray, norms, root_references: np.ndarray) -> np.nd
     terms = np.take(root_references, filled - boxes * n_bins, axis=0)              # (filled, K)
     terms *= roots[:, None]
     starts = np.searchsorted(boxes, np.arange(n_boxes + 1))                        # each box's first bin
-    nonempty = np.flatnonzero(starts[1:] > starts[:-1])
+    filled_boxes = starts[1:] > starts[:-1]
+    if filled_boxes.all():                                                         # the usual case
+        return np.add.reduceat(terms, starts[:-1], axis=0)
+    nonempty = np.flatnonzero(filled_boxes)
     rho[nonempty] = np.add.reduceat(terms, starts[nonempty], axis=0)
     return rho
 
@@ -1116,15 +1155,24 @@ class ColourCue:
 
     def _candidate_histograms(self, obs: Observation, features: tuple, states: np.ndarray,
                               owner: np.ndarray) -> np.ndarray:
-        counts, norms = self._candidate_counts(obs, features, states[:, :2], _particle_sizes(obs, states, owner))
+        self._check_observation(obs)
+        bin_image, _ = features
+        sampling = _sample(states[:, :2], _particle_sizes(obs, states, owner), self.config.samples,
+                           bin_image.shape, self._masked)
+        counts, norms = self._block_counts(obs, features, sampling, _slots(bin_image, sampling, self.config.n_bins),
+                                           self.config.n_bins)
         return counts.reshape(-1, self.config.n_bins) / norms
 
-    def _candidate_counts(self, obs: Observation, features: tuple, centres: np.ndarray,
-                          sizes: np.ndarray) -> tuple[np.ndarray, np.ndarray | float]:
-        """:func:`_kernel_counts` of the boxes at ``centres`` with ``sizes`` in this frame."""
-        bin_image, weights = features
-        return _kernel_counts(bin_image, centres, sizes, self.config.n_bins, self.config.samples,
-                              pixel_weights=weights)
+    #: Whether the candidate histograms count the foreground only (which points lie in the image matters).
+    _masked: ClassVar[bool] = False
+
+    def _check_observation(self, obs: Observation) -> None:
+        """Refuse an observation that lacks what this cue reads."""
+
+    def _block_counts(self, obs: Observation, features: tuple, sampling: _Sampling, slots: np.ndarray,
+                      width: int) -> tuple[np.ndarray, np.ndarray | float]:
+        """:func:`_counts` of a block of sampled boxes in this frame, ``width`` slots per box."""
+        return _counts(slots, sampling, width, pixel_weights=features[1])
 
     def false_alarm_histogram(self, obs: Observation) -> np.ndarray:
         """q_FA of this frame, shape (B,) (W (18)); A_j = w_j · h_j from ``obs.sizes``.
@@ -1143,20 +1191,7 @@ class ColourCue:
     def log_likelihoods(self, obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
         """log p_1 … log p_τ, log p_FA = −(1 − ρ) / (2σ²) of every particle, shape (P, τ + 1) (W (16)–(19))."""
         states, owner = _particles(obs, states, owner)
-        self._check_targets(obs)
-        features = self._frame_features(obs)
-        references = np.concatenate([self._templates, self._false_alarm(obs, features)[None, :]])   # (τ + 1, B)
-        root_references = np.sqrt(references).T.copy()                                    # (B, τ + 1), rows gathered
-        centres, sizes = states[:, :2], _particle_sizes(obs, states, owner)
-        rho = np.empty((states.shape[0], references.shape[0]))
-        # Blocks keep every temporary of a block (its samples, its dense counts) small enough
-        # for the allocator to serve from memory it already holds, whatever P.
-        for start in range(0, states.shape[0], HISTOGRAM_BLOCK):
-            block = slice(start, start + HISTOGRAM_BLOCK)
-            counts, norms = self._candidate_counts(obs, features, centres[block], sizes[block])
-            rho[block] = _sparse_rho(counts.reshape(-1, self.config.n_bins), norms, root_references)
-        np.clip(rho, 0.0, 1.0, out=rho)
-        return _log_gaussian(1.0 - rho, self.config.sigma)                          # d² = 1 − ρ (W (17))
+        return _score_together([self], obs, states, owner)[0]
 
     def _check_targets(self, obs: Observation) -> None:
         if obs.n_targets != self.n_targets:
@@ -1208,13 +1243,16 @@ class ForegroundColourCue(ColourCue):
         # The template describes the target, not how much of its box it fills: normalise to 1.
         return np.where(mass > 0, masked / np.where(mass > 0, mass, 1.0), plain)
 
-    def _candidate_counts(self, obs: Observation, features: tuple, centres: np.ndarray,
-                          sizes: np.ndarray) -> tuple[np.ndarray, np.ndarray | float]:
+    _masked: ClassVar[bool] = True
+
+    def _check_observation(self, obs: Observation) -> None:
         if obs.foreground is None:
-            raise TrackingError("the foreground cue needs Observation.foreground, the background model's mask; got None")
-        bin_image, weights = features
-        return _kernel_counts(bin_image, centres, sizes, self.config.n_bins, self.config.samples, obs.foreground,
-                              pixel_weights=weights)
+            raise TrackingError("the foreground cue needs Observation.foreground, the background model's mask; "
+                                "got None")
+
+    def _block_counts(self, obs: Observation, features: tuple, sampling: _Sampling, slots: np.ndarray,
+                      width: int) -> tuple[np.ndarray, np.ndarray | float]:
+        return _counts(slots, sampling, width, obs.foreground, pixel_weights=features[1])
 
 
 # -- edge cue -------------------------------------------------------------------------------------
@@ -1305,6 +1343,99 @@ class EdgeCue(ColourCue):
 
     def _frame_features(self, obs: Observation) -> tuple[np.ndarray, np.ndarray]:
         return obs.orientation_bins(self.config.bins, min_gradient=self.config.min_gradient)
+
+
+def score_cues(cues, obs: Observation, states: np.ndarray, owner: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Every cue's ``log_likelihoods(obs, states, owner)``, in the order of ``cues``.
+
+    Colour cues (:class:`ColourCue` and the subclasses that keep its scoring) that read the
+    same bin image with the same bins and sample grid place the sample points of every box
+    once between them, which is most of their cost: the colour and foreground cues of the
+    default tracker share it.  The scores are those of each cue on its own.
+
+    Parameters
+    ----------
+    cues : sequence of Cue
+    obs : Observation
+    states : ndarray, shape (P, 5)
+    owner : ndarray of int, shape (P,)
+
+    Returns
+    -------
+    tuple of ndarray, each of shape (P, τ + 1) (or what the cue returns)
+
+    Examples
+    --------
+    >>> image = np.full((60, 80, 3), 128, np.uint8)
+    >>> image[20:40, 30:40] = (0, 0, 255)
+    >>> mask = image[..., 2] == 255
+    >>> config = ColourConfig(samples=(6, 12))
+    >>> colour, foreground = ColourCue(config), ForegroundColourCue(config)
+    >>> for cue in (colour, foreground):
+    ...     cue.set_templates(image, np.array([[30, 20, 10, 20]]), foreground=mask)
+    >>> obs = Observation(image, mask, [[35.0, 30.0]], [[10.0, 20.0]], np.zeros((0, 2)))
+    >>> states, owner = np.array([[35.0, 30.0, 0, 0, 0], [60.0, 30.0, 0, 0, 0]]), np.array([0, 0])
+    >>> together = score_cues([colour, foreground], obs, states, owner)
+    >>> alone = [cue.log_likelihoods(obs, states, owner) for cue in (colour, foreground)]
+    >>> all(np.array_equal(t, a) for t, a in zip(together, alone))
+    True
+    """
+    states, owner = _particles(obs, states, owner)
+    scores: list = [None] * len(cues)
+    groups: dict[tuple, list[int]] = {}
+    for index, cue in enumerate(cues):
+        if isinstance(cue, ColourCue) and type(cue).log_likelihoods is ColourCue.log_likelihoods:
+            bin_image, weights = cue._frame_features(obs)          # memoised on obs: the ids stay valid
+            groups.setdefault((id(bin_image), id(weights), cue.config.n_bins, cue.config.samples), []).append(index)
+        else:
+            scores[index] = cue.log_likelihoods(obs, states, owner)
+    for members in groups.values():
+        for index, score in zip(members, _score_together([cues[i] for i in members], obs, states, owner)):
+            scores[index] = score
+    return tuple(scores)
+
+
+def _score_together(cues: list, obs: Observation, states: np.ndarray, owner: np.ndarray) -> list[np.ndarray]:
+    """:meth:`ColourCue.log_likelihoods` of colour cues that share their features and grid, each box sampled once.
+
+    The bins that no pixel of the frame fills (with a positive weight) cannot be in any box,
+    so the histograms are counted over the frame's own bins only, in their order (plus one
+    slot, read against zero, for weightless points), which keeps the dense counts of a block
+    a few times smaller and gives the same sums.
+    """
+    first = cues[0]
+    features = first._frame_features(obs)
+    bin_image, weights = features
+    n_bins = first.config.n_bins
+    present = np.flatnonzero(_scene_counts(obs, bin_image, weights, n_bins) > 0)
+    compact = np.full(n_bins, present.size, np.intp)
+    compact[present] = np.arange(present.size)
+    width = present.size + 1
+    roots, rhos = [], []
+    for cue in cues:
+        cue._check_targets(obs)
+        cue._check_observation(obs)
+        references = np.concatenate([cue._templates, cue._false_alarm(obs, features)[None, :]])    # (τ + 1, B)
+        root = np.zeros((width, references.shape[0]))                       # (width, τ + 1), rows gathered
+        root[:-1] = np.sqrt(references[:, present]).T
+        roots.append(root)
+        rhos.append(np.empty((states.shape[0], references.shape[0])))
+    centres, sizes = states[:, :2], _particle_sizes(obs, states, owner)
+    masked = any(cue._masked for cue in cues)
+    # Blocks keep every temporary of a block (its samples, its dense counts) small enough
+    # for the allocator to serve from memory it already holds, whatever P.
+    for start in range(0, states.shape[0], HISTOGRAM_BLOCK):
+        block = slice(start, start + HISTOGRAM_BLOCK)
+        sampling = _sample(centres[block], sizes[block], first.config.samples, bin_image.shape, masked)
+        slots = _slots(bin_image, sampling, width, compact)
+        for cue, root, rho in zip(cues, roots, rhos):
+            counts, norms = cue._block_counts(obs, features, sampling, slots, width)
+            rho[block] = _sparse_rho(counts.reshape(-1, width), norms, root)
+    scores = []
+    for cue, rho in zip(cues, rhos):
+        np.clip(rho, 0.0, 1.0, out=rho)
+        scores.append(_log_gaussian(1.0 - rho, cue.config.sigma))                  # d² = 1 − ρ (W (17))
+    return scores
 
 
 def _scene_counts(obs: Observation, bin_image: np.ndarray, weights: np.ndarray | None, n_bins: int) -> np.ndarray:

@@ -43,7 +43,7 @@ from belief_tracking.background import BackgroundModel
 from belief_tracking.blobs import box_mask
 from belief_tracking.candidates import BlobCandidates
 from belief_tracking.config import TrackerConfig
-from belief_tracking.cues import CUES, AppearanceCue, Observation, bhattacharyya
+from belief_tracking.cues import CUES, AppearanceCue, Observation, bhattacharyya, score_cues
 from belief_tracking.detections import Detections, check_rows
 from belief_tracking.errors import InitError, TrackingError
 from belief_tracking.initiation import InitPlan
@@ -397,7 +397,7 @@ class Tracker:
         counts = np.array([len(p) for p in moved])
         states = np.concatenate([p.states for p in moved])                            # (P, 5)
         owner = np.repeat(np.arange(len(moved)), counts)                               # (P,)
-        scores = tuple(cue.log_likelihoods(obs, states, owner) for cue in self.cues)
+        scores = score_cues(self.cues, obs, states, owner)
         similarity = self.appearance.similarity(self.tracks.ids) if self.appearance is not None else None
         return Evidence(scores, owner, states[:, [CX, CY]], similarity, self.config.cues)
 
