@@ -79,6 +79,9 @@ ENGINES = ("auto", "general", "bayesian")
 BLOCK_ENTRIES = 1 << 17
 #: Rows × |O| × |O| entries per block of the pairwise pass of the R-weighted rule.
 PAIR_BLOCK_ENTRIES = 1 << 17
+#: Rows per block of a fusion that reads the sources column by column (a column of a block stays
+#: below the size where the allocator maps fresh pages for every temporary).
+COLUMN_BLOCK_ROWS = 1 << 13
 #: Rows × |O| entries per block of rows of the R-weighted rule's folds.
 ROW_BLOCK_ENTRIES = 1 << 13
 
@@ -362,6 +365,24 @@ class _Fusion:
     def e_measure(self, kind: str) -> np.ndarray:
         raise NotImplementedError
 
+    sources: "_Blocks"
+    _picks: tuple[bytes, list[np.ndarray]] | None = None
+    #: BetP's divisor, once checked for total conflict (False: no row has m(∅) > 0).
+    _betp_scale: np.ndarray | bool | None = None
+
+    def picked(self, positions: np.ndarray) -> list[np.ndarray]:
+        """Each source's mass of θ_j, j the free hypothesis ``positions[n]``, in row n; shape (N,) each.
+
+        Bel, BetP and the mass of one reading select the same hypotheses, so the gathers of
+        the last ``positions`` are kept.
+        """
+        key = positions.tobytes()
+        if self._picks is None or self._picks[0] != key:
+            sources, free = self.sources, self.split.o_index
+            self._picks = (key, [sources.gather_source(k, lookup[free].take(positions))
+                                 for k, lookup in enumerate(sources.lookup)])
+        return self._picks[1]
+
 
 def _sources(values: Sequence[np.ndarray], split: ExclusiveSplit):
     """Each source's free rows (|O|, B), exclusive rows (|E|, B) and free total O_i (B,), of one block."""
@@ -370,12 +391,21 @@ def _sources(values: Sequence[np.ndarray], split: ExclusiveSplit):
     return free, excl, [f.sum(axis=0) for f in free]
 
 
+@lru_cache(maxsize=4)
+def _row_offsets(rows: int, stride: int) -> np.ndarray:
+    """n · stride for n < rows: where each row starts in a flattened (rows, stride) array (read-only, shared)."""
+    out = np.arange(0, rows * stride, stride, dtype=np.int64)
+    out.flags.writeable = False
+    return out
+
+
 class _Blocks:
     """The sources read in blocks of rows, each block turned to (hypotheses, rows) in frame order.
 
-    A fusion computes its per-row results block by block: every temporary then holds a few
-    thousand numbers and stays in cache (a temporary of the whole batch would be allocated,
-    and the pages of its memory touched, at every call).
+    A fusion computes its per-row results block by block: every temporary then stays in
+    cache (a temporary of the whole batch would be allocated, and the pages of its memory
+    touched, at every call), while a block is long enough that numpy's per-call overhead
+    is spread over thousands of rows.
 
     Parameters
     ----------
@@ -389,62 +419,124 @@ class _Blocks:
     maps : sequence of (None or (ndarray, ndarray)), optional
         For a source whose columns are not θ_1 … θ_n in frame order: the frame position of
         each of its singleton columns, and those columns.
+    step : int, optional
+        Rows per block, for a fusion that reads the sources column by column
+        (:meth:`total`, :meth:`part`) and never holds a whole block.
     """
 
-    def __init__(self, values: Sequence[np.ndarray], width: int, pairs: int = 0, maps=None) -> None:
+    def __init__(self, values: Sequence[np.ndarray], width: int, pairs: int = 0, maps=None,
+                 step: int | None = None) -> None:
         self.values = [np.asarray(v) for v in values]
         self.width = width
-        self.maps = list(maps) if maps is not None else [None] * len(values)
         self.rows = max(v.shape[0] for v in self.values)
-        self.step = max(64, min(ROW_BLOCK_ENTRIES // max(1, width), PAIR_BLOCK_ENTRIES // max(1, pairs * pairs)))
-        self._flat: tuple[bytes, np.ndarray] | None = None
+        if step is None:
+            step = max(64, min(ROW_BLOCK_ENTRIES // max(1, width), PAIR_BLOCK_ENTRIES // max(1, pairs * pairs)))
+        self.step = step
+        # For each source: the column of each frame position, −1 where it has none (mass 0).
+        self.lookup = []
+        for v, mapping in zip(self.values, maps if maps is not None else [None] * len(self.values)):
+            lookup = np.arange(width, dtype=np.int64)
+            if mapping is not None:
+                lookup[:] = -1
+                lookup[mapping[0]] = mapping[1]
+            self.lookup.append(lookup)
+        self.complete = [bool((lookup >= 0).all()) for lookup in self.lookup]
 
     def __iter__(self):
         for start in range(0, self.rows, self.step):
             yield slice(start, min(self.rows, start + self.step))
 
-    def _rows(self, v: np.ndarray, rows: slice) -> np.ndarray:
-        if v.shape[0] == self.rows:
-            return v[rows]
-        return np.broadcast_to(v[0], (rows.stop - rows.start, v.shape[1]))      # one row, broadcast
+    def _columns(self, k: int) -> np.ndarray:
+        """Source k as (K_k, N); rows of it are contiguous when the source is stored column-major."""
+        v = self.values[k]
+        if not (v.flags.c_contiguous or v.flags.f_contiguous):
+            v = self.values[k] = np.ascontiguousarray(v)
+        return v.T
 
     def block(self, rows: slice) -> list[np.ndarray]:
+        """Each source's rows ``rows`` as (n, B), θ_1 … θ_n in frame order (views where the memory allows)."""
         out = []
-        for v, mapping in zip(self.values, self.maps):
-            part = self._rows(v, rows)
-            if mapping is None:
-                out.append(np.ascontiguousarray(part.T))
-                continue
-            positions, columns = mapping
-            block = np.zeros((self.width, rows.stop - rows.start))
-            block[positions] = part.take(columns, axis=1).T
-            out.append(block)
+        size = rows.stop - rows.start
+        for k, v in enumerate(self.values):
+            lookup = self.lookup[k]
+            columns = self._columns(k)
+            if v.shape[0] != self.rows:                          # one row, broadcast
+                row = np.where(lookup >= 0, columns[:, 0].take(np.maximum(lookup, 0)), 0.0)
+                out.append(np.repeat(row[:, None], size, axis=1))
+            elif not self.complete[k]:
+                block = np.zeros((self.width, size))
+                present = lookup >= 0
+                block[present] = columns[:, rows].take(lookup[present], axis=0)
+                out.append(block)
+            elif v.flags.f_contiguous and np.array_equal(lookup, np.arange(self.width)):
+                out.append(columns[:, rows])                     # already (n, B), rows contiguous
+            else:
+                out.append(columns[:, rows].take(lookup, axis=0))
+        return out
+
+    def column(self, k: int, j: int, rows: slice) -> np.ndarray | None:
+        """Source k's masses of θ_j (frame position j) in ``rows``, a view: shape (B,), or (1,) if broadcast."""
+        c = int(self.lookup[k][j])
+        if c < 0:
+            return None
+        columns = self._columns(k)
+        return columns[c, :1] if self.values[k].shape[0] != self.rows else columns[c, rows]
+
+    def total(self, k: int, positions: Sequence[int], rows: slice, out: np.ndarray) -> np.ndarray:
+        """Σ_j of source k's masses of θ_j, j in ``positions`` (frame order), in ``rows``, written to ``out``.
+
+        Read where the masses lie: one reduction when the columns are adjacent, else one
+        addition per column, so that no block of the source is copied.
+        """
+        columns = self._columns(k)
+        cols = [int(self.lookup[k][j]) for j in positions]
+        cols = [c for c in cols if c >= 0]
+        part = columns[:, :1] if self.values[k].shape[0] != self.rows else columns[:, rows]
+        if not cols:
+            out[...] = 0.0
+        elif len(cols) > 2 and cols == list(range(cols[0], cols[0] + len(cols))):
+            adjacent = part[cols[0]:cols[-1] + 1]
+            if adjacent.shape[1] == out.shape[0]:
+                np.add.reduce(adjacent, axis=0, out=out)
+            else:
+                out[...] = np.add.reduce(adjacent, axis=0)
+        elif len(cols) == 1:
+            np.copyto(out, part[cols[0]])
+        else:
+            np.add(part[cols[0]], part[cols[1]], out=out)
+            for c in cols[2:]:
+                out += part[c]
+        return out
+
+    def part(self, k: int, positions: Sequence[int], rows: slice) -> np.ndarray:
+        """Source k's masses of θ_j, j in ``positions``, in ``rows``: a (len(positions), B) copy."""
+        out = np.zeros((len(positions), rows.stop - rows.start))
+        for i, j in enumerate(positions):
+            column = self.column(k, j, rows)
+            if column is not None:
+                out[i] = column
         return out
 
     def gather(self, k: int, frame_columns: np.ndarray) -> np.ndarray:
         """The mass of θ_{frame_columns[n]} in row n of source k, shape (N,)."""
-        v, mapping = self.values[k], self.maps[k]
-        columns = frame_columns
-        if mapping is not None:
-            lookup = np.full(self.width, -1, dtype=np.int64)
-            lookup[mapping[0]] = mapping[1]
-            columns = lookup[frame_columns]
-            absent = columns < 0
+        return self.gather_source(k, self.lookup[k].take(frame_columns))
+
+    def gather_source(self, k: int, columns: np.ndarray) -> np.ndarray:
+        """The mass in column ``columns[n]`` of source k (−1: none, mass 0) in row n, shape (N,)."""
+        v = self._columns(k).T
+        absent = None if self.complete[k] else columns < 0
+        if absent is not None:
             columns = np.where(absent, 0, columns)
         if v.shape[0] != self.rows:                              # a one-row source, broadcast
             out = v[0].take(columns)
+        elif v.flags.c_contiguous:
+            out = v.reshape(-1).take(np.add(columns, _row_offsets(self.rows, v.shape[1])))
         else:
-            if not (v.flags.c_contiguous or v.flags.f_contiguous):
-                v = self.values[k] = np.ascontiguousarray(v)
-            # Read the masses where they lie: row-major or column-major, without a copy.
-            c_order = v.flags.c_contiguous
-            key = columns.tobytes() + bytes([v.shape[1] & 255, c_order])
-            if self._flat is None or self._flat[0] != key:
-                flat = (np.arange(self.rows) * v.shape[1] + columns if c_order
-                        else columns * self.rows + np.arange(self.rows))
-                self._flat = (key, flat)
-            out = (v if c_order else v.T).reshape(-1).take(self._flat[1])
-        if mapping is not None and absent.any():
+            # Column-major: the masses of a hypothesis lie together.
+            flat = np.multiply(columns, self.rows)
+            flat += _row_offsets(self.rows, 1)
+            out = v.T.reshape(-1).take(flat)
+        if absent is not None:
             out[absent] = 0.0
         return out
 
@@ -457,11 +549,21 @@ def _first_pick(free: Sequence[np.ndarray], totals: Sequence[np.ndarray]) -> np.
     mass of the other free hypotheses, never more than O_i, so its rounding stays below
     that of P_O = Π_i O_i.  Works on (|O|, N) arrays and on one (N,) value per row alike.
     """
-    bel = free[0].copy()
-    without = np.maximum(totals[0] - free[0], 0.0)        # the tuples so far that avoid θ_j
-    for m, total in zip(free[1:], totals[1:]):
-        bel = bel * total + without * m
-        without = without * np.maximum(total - m, 0.0)
+    bel = np.array(free[0], dtype=np.float64, copy=True)
+    if len(free) == 1:
+        return bel
+    without = np.subtract(totals[0], free[0])              # the tuples so far that avoid θ_j
+    np.maximum(without, 0.0, out=without)
+    term = np.empty_like(without)
+    last = len(free) - 1
+    for k in range(1, len(free)):
+        m, total = free[k], totals[k]
+        bel *= total
+        bel += np.multiply(without, m, out=term)
+        if k < last:
+            np.subtract(total, m, out=term)
+            np.maximum(term, 0.0, out=term)
+            without *= term
     return bel
 
 
@@ -499,21 +601,28 @@ class ConjunctiveFusion(_Fusion):
     def __init__(self, values, empties, split: ExclusiveSplit, rule: str, maps=None) -> None:
         self.split = split
         self.rule = rule
-        self.sources = _Blocks(values, split.size, maps=maps)
+        self.sources = _Blocks(values, split.size, maps=maps, step=COLUMN_BLOCK_ROWS)
         n = self.rows = self.sources.rows
-        self.totals = np.empty((len(values), n))                   # O_i per source
+        s = len(values)
+        self.totals = np.empty((s, n))                             # O_i per source
         self.exclusive = np.empty((len(split.exclusive), n))       # Π_i m_i(θ_e)
         self.conflict = np.empty(n)                                # m∩(∅), summed over conflicting tuples
-        for rows in self.sources:
-            free, excl, totals = _sources(self.sources.block(rows), split)
-            self.totals[:, rows] = totals
-            self.exclusive[:, rows] = _product(excl)
+        sources = self.sources
+        for rows in sources:
+            totals = [sources.total(k, split.free, rows, self.totals[k, rows]) for k in range(s)]
+            excl = [sources.part(k, split.exclusive, rows) for k in range(s)]
+            if s > 1:
+                np.multiply(excl[0], excl[1], out=self.exclusive[:, rows])
+                for e in excl[2:]:
+                    self.exclusive[:, rows] *= e
             self.conflict[rows] = _conflict(excl, totals, [None if z is None else z[rows] for z in empties])
         self.all_free = _product(list(self.totals))                # P_O = Π_i O_i
-        self.scale = self.all_free + self.exclusive.sum(axis=0)    # Σ of the non-empty masses
+        self.scale = np.add.reduce(self.exclusive, axis=0)         # Σ of the non-empty masses
+        self.scale += self.all_free
         if rule == "dempster" and not (self.scale > _WIDE_SCALE).all():
             raise _Underflow       # total conflict, or products that underflowed: the general path tells which
         self._cache: dict = {}
+        self._bel: tuple[bytes, np.ndarray] | None = None
 
     def empty(self) -> np.ndarray:
         return self.conflict if self.rule in ("conjunctive", "dsmc") else np.zeros(self.rows)
@@ -522,7 +631,9 @@ class ConjunctiveFusion(_Fusion):
         return self.scale
 
     def _norm(self, values: np.ndarray) -> np.ndarray:
-        return values / self.scale if self.rule == "dempster" else values
+        if self.rule != "dempster":
+            return values
+        return np.divide(values, self.scale, out=values if values.ndim == 1 else None)
 
     def _yager_shares(self) -> tuple[float, float]:
         """C(θ_j)/C(Θ) for j in O and in E: Θ holds the conflict under Yager's rule."""
@@ -530,13 +641,18 @@ class ConjunctiveFusion(_Fusion):
         total = 2.0 - inverse + len(self.split.exclusive) * inverse    # C(Θ) / 2^(|O|-1)
         return 1.0 / total, inverse / total
 
-    def _measure(self, kind: str, free: list[np.ndarray], totals, all_free, conflict) -> np.ndarray:
+    def _measure(self, kind: str, free: list[np.ndarray], totals, all_free, conflict, bel=None) -> np.ndarray:
+        """The raw (before Dempster's normalisation) measure; fresh arrays, free to reuse."""
         if kind == "mass":
             return _product(free)
-        bel = _first_pick(free, totals)
-        if kind == "bel":
-            return bel
-        out = 0.5 * (all_free + bel)                                   # θ_S with j ∉ S counts for ½
+        if bel is None:
+            bel = _first_pick(free, totals)
+            if kind == "bel":
+                return bel
+        elif kind == "bel":
+            return bel.copy()
+        out = np.add(all_free, bel)
+        out *= 0.5                                                     # θ_S with j ∉ S counts for ½
         if self.rule == "yager":
             out += conflict * self._yager_shares()[0]
         return out
@@ -546,11 +662,17 @@ class ConjunctiveFusion(_Fusion):
         if key in self._cache:
             return self._cache[key]
         if kind == "pls":
-            out = self._norm(self.all_free + self.conflict if self.rule == "yager" else self.all_free)
+            out = self.all_free + self.conflict if self.rule == "yager" else self.all_free.copy()
+            out = self._norm(out)
         elif positions is not None:
-            columns = np.asarray(self.split.free)[positions]
-            free = [self.sources.gather(k, columns) for k in range(len(self.totals))]
-            out = self._norm(self._measure(kind, free, list(self.totals), self.all_free, self.conflict))
+            free = self.picked(positions)
+            bel = None
+            if kind != "mass":
+                # Bel and BetP of one selection share the sum over the first source that picks θ_j.
+                if self._bel is None or self._bel[0] != key[1]:
+                    self._bel = (key[1], _first_pick(free, list(self.totals)))
+                bel = self._bel[1]
+            out = self._norm(self._measure(kind, free, list(self.totals), self.all_free, self.conflict, bel))
         else:
             out = np.empty((len(self.split.free), self.rows))
             for rows in self.sources:
@@ -1606,6 +1728,16 @@ def _columns(model: Model, queries) -> tuple[tuple[int, ...] | None, bool]:
         return _query_columns.__wrapped__(model, key), single
 
 
+@lru_cache(maxsize=1024)
+def _select_table(split: ExclusiveSplit, columns: tuple[int, ...]) -> tuple[np.ndarray, bool]:
+    """Each query's place in [O, E, ∅] (∅ last), read-only, and whether every query is a free hypothesis."""
+    o = len(split.free)
+    position = np.append(split.position, o + len(split.exclusive))
+    table = position[list(columns)]
+    table.flags.writeable = False
+    return table, bool((table < o).all())
+
+
 class ClosedFormBatch(MassBatch):
     """A fused batch of Bayesian sources whose measures come from closed forms (:mod:`belief.bayesian`).
 
@@ -1683,7 +1815,8 @@ class ClosedFormBatch(MassBatch):
                 out = self._table(kind, columns)
                 return out[:, 0] if single else out
             chosen = check_select(select, self._rows, len(columns))
-            return self._selected(kind, np.asarray(columns, dtype=np.int64)[chosen])
+            table, every_free = _select_table(self._fusion.split, columns)
+            return self._selected(kind, table.take(chosen), every_free)
         except _NoClosedForm:
             return None
 
@@ -1699,36 +1832,45 @@ class ClosedFormBatch(MassBatch):
         out = table[:, position[list(columns)]]
         return self._normalise(out) if kind == "betp" else out
 
-    def _selected(self, kind: str, frame_columns: np.ndarray) -> np.ndarray:
-        fusion, split = self._fusion, self._fusion.split
-        o = len(split.free)
-        position = np.append(split.position, o + len(split.exclusive))[frame_columns]
-        free = position < o
-        if free.all():
+    def _selected(self, kind: str, position: np.ndarray, every_free: bool) -> np.ndarray:
+        """The measure of one query per row; ``position`` in [O, E, ∅] coordinates (:func:`_select_table`)."""
+        fusion = self._fusion
+        o = len(fusion.split.free)
+        if every_free:
             out = fusion.o_measure(kind, position)
         else:
+            free = position < o
             out = np.zeros(self._rows)
             if free.any():
                 out[free] = fusion.o_measure(kind, np.where(free, position, 0))[free]
-            exclusive = ~free & (frame_columns >= 0)
+            exclusive = ~free & (position < o + len(fusion.split.exclusive))
             if exclusive.any():
                 rows = np.flatnonzero(exclusive)
                 out[rows] = fusion.e_measure(kind)[rows, position[rows] - o]
-            if kind == "mass" and (frame_columns < 0).any():
-                rows = np.flatnonzero(frame_columns < 0)
+            nothing = ~(free | exclusive)
+            if kind == "mass" and nothing.any():
+                rows = np.flatnonzero(nothing)
                 out[rows] = fusion.empty()[rows]
-        out = np.array(out, dtype=np.float64, copy=True)
-        return self._normalise(out) if kind == "betp" else out
+        if kind == "betp":
+            return self._normalise(out)                  # a new array: the cached numerator stays
+        return np.array(out, dtype=np.float64, copy=True)
 
     def _normalise(self, numerator: np.ndarray) -> np.ndarray:
         """Remove ∅ and rescale by the non-empty mass, where MassBatch.betp does (some row has m(∅) > 0)."""
-        if not self._fusion.empty().any():
-            return numerator
-        scale = self._fusion.kept()
-        dead = scale <= 0
-        if dead.any():
-            where = f" (row {int(np.flatnonzero(dead)[0])})" if self._rows > 1 else ""
-            raise TotalConflictError(f"BetP is undefined: total conflict, m(∅) = 1{where}")
+        fusion = self._fusion
+        scale = fusion._betp_scale
+        if scale is None:
+            if not fusion.empty().any():
+                scale = False
+            else:
+                scale = fusion.kept()
+                dead = scale <= 0
+                if dead.any():
+                    where = f" (row {int(np.flatnonzero(dead)[0])})" if self._rows > 1 else ""
+                    raise TotalConflictError(f"BetP is undefined: total conflict, m(∅) = 1{where}")
+            fusion._betp_scale = scale
+        if scale is False:
+            return np.array(numerator, dtype=np.float64, copy=True)
         return numerator / (scale if numerator.ndim == 1 else scale[:, None])
 
     def bel(self, queries, *, select=None) -> np.ndarray:
