@@ -137,12 +137,14 @@ def cue_masses(log_likelihoods: np.ndarray, mode: str = "normalised") -> np.ndar
     if peak > 0:
         raise TrackingError("absolute cue masses need likelihoods in [0, 1] (log-likelihoods ≤ 0)")
     likelihoods = np.exp(values)
-    fits = likelihoods.sum(axis=1) <= 1.0
-    likelihoods[:, -1] = 1.0 - likelihoods[:, :-1].sum(axis=1)
-    if not fits.all():
-        # Rows whose likelihoods sum past one are normalised as W (20)–(21) (row by row, so
-        # computing them apart gives the same numbers).
-        likelihoods[~fits] = _softmax(values[~fits])
+    targets = likelihoods[:, :-1].sum(axis=1)
+    total = targets + likelihoods[:, -1]
+    fits = total <= 1.0
+    # Rows whose likelihoods sum past one are normalised as W (20)–(21).  Their largest
+    # likelihood is then above 1 / (τ + 1), so dividing by the sum loses nothing to the
+    # shift by the maximum that a softmax of arbitrary log-likelihoods needs.
+    likelihoods /= np.where(fits, 1.0, total)[:, None]
+    likelihoods[:, -1] = np.where(fits, 1.0 - targets, likelihoods[:, -1])
     return likelihoods
 
 
