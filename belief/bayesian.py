@@ -76,14 +76,14 @@ __all__ = ["ENGINES", "ClosedFormBatch", "ExclusiveSplit", "exclusive_split", "c
 ENGINES = ("auto", "general", "bayesian")
 
 #: Rows × grid entries per block of the enumerations (a block's temporaries stay in cache).
-BLOCK_ENTRIES = 1 << 17
+BLOCK_ENTRIES = 1 << 19
 #: Rows × |O| × |O| entries per block of the pairwise pass of the R-weighted rule.
-PAIR_BLOCK_ENTRIES = 1 << 17
+PAIR_BLOCK_ENTRIES = 1 << 19
 #: Rows per block of a fusion that reads the sources column by column (a column of a block stays
 #: below the size where the allocator maps fresh pages for every temporary).
 COLUMN_BLOCK_ROWS = 1 << 13
 #: Rows × |O| entries per block of rows of the R-weighted rule's folds.
-ROW_BLOCK_ENTRIES = 1 << 13
+ROW_BLOCK_ENTRIES = 1 << 15
 
 _CONJUNCTIVE = ("conjunctive", "dsmc", "dempster", "yager")
 _PCR = ("pcr5", "pcr6")
@@ -861,27 +861,7 @@ def _grid_shares(xs: list[np.ndarray], product: np.ndarray, weight_f: np.ndarray
     o, rows = xs[0].shape
     block = max(64, BLOCK_ENTRIES // max(1, o ** b))
     if b == 2:
-        x, y = xs
-        diagonal = np.arange(o)
-        for start in range(0, rows, block):
-            r = slice(start, min(rows, start + block))
-            xr, yr, c, wf = x[:, r], y[:, r], product[r], weight_f[r]
-            h = np.add(xr[:, None], yr[None])              # (a, b, rows): D = wf + x_a + y_b
-            h += wf
-            # D = 0 only where x_a = y_b = wf = 0, and then both products below vanish.
-            np.maximum(h, 1e-300, out=h)
-            np.reciprocal(h, out=h)
-            if pcr5:
-                h[diagonal, diagonal] = 0.0                # a = b is one group: below
-            hy = np.einsum("abn,bn->an", h, yr)
-            hx = np.einsum("abn,an->bn", h, xr)
-            to_free[:, r] += c * (xr * xr * hy + yr * yr * hx)
-            to_f[r] += wf * c * (xr * hy).sum(axis=0)
-            if pcr5:
-                group = xr * yr                            # both sources on θ_a: weight m_1(θ_a) m_2(θ_a)
-                g = c * _share(group, c + group)
-                to_free[:, r] += group * g
-                to_f[r] += c * g.sum(axis=0)
+        _pair_grid_shares(xs[0], xs[1], product, weight_f, pcr5, block, to_free, to_f)
         return
     shape = [o] * b
     if pcr5:
@@ -913,6 +893,48 @@ def _grid_shares(xs: list[np.ndarray], product: np.ndarray, weight_f: np.ndarray
             others = tuple(j for j in range(b) if j != k)
             to_free[:, r] += (weights[k] * g).sum(axis=others).reshape(o, n)
         to_f[r] += wf * g.reshape(-1, n).sum(axis=0)
+
+
+def _pair_grid_shares(x: np.ndarray, y: np.ndarray, product: np.ndarray, weight_f: np.ndarray, pcr5: bool,
+                      block: int, to_free: np.ndarray, to_f: np.ndarray) -> None:
+    """:func:`_grid_shares` of two free positions: H_ab = 1 / (w_F + x_a + y_b) per row, two contractions.
+
+    θ_a gets c x_a² Σ_b H_ab y_b and θ_b gets c y_b² Σ_a H_ab x_a, F gets c w_F Σ_ab x_a H_ab y_b.
+    The grid and the per-block results are allocated once and reused from block to block.
+    """
+    o, rows = x.shape
+    diagonal = np.arange(o)
+    # D = 0 only where x_a = y_b = w_F = 0, and then every share of the tuple vanishes; raising
+    # w_F + x_a to 1e-300 changes no share by more than its tuple's product, below 1e-300.
+    alpha = np.add(x, weight_f)
+    np.maximum(alpha, 1e-300, out=alpha)
+    step = min(block, rows)
+    grid, hy, hx, term = np.empty((o, o, step)), np.empty((o, step)), np.empty((o, step)), np.empty((o, step))
+    for start in range(0, rows, step):
+        r = slice(start, min(rows, start + step))
+        if r.stop - r.start != step:                     # the last, shorter block
+            step = r.stop - r.start
+            grid, hy, hx, term = np.empty((o, o, step)), np.empty((o, step)), np.empty((o, step)), np.empty((o, step))
+        xr, yr, c, wf = x[:, r], y[:, r], product[r], weight_f[r]
+        np.add(alpha[:, None, r], yr[None], out=grid)    # (a, b, rows): D = w_F + x_a + y_b
+        np.divide(1.0, grid, out=grid)
+        if pcr5:
+            grid[diagonal, diagonal] = 0.0               # a = b is one group: below
+        np.einsum("abn,bn->an", grid, yr, out=hy)
+        np.einsum("abn,an->bn", grid, xr, out=hx)
+        np.multiply(xr, hy, out=term)                    # x_a Σ_b H_ab y_b
+        to_f[r] += wf * c * np.add.reduce(term, axis=0)
+        term *= xr
+        hx *= yr
+        hx *= yr
+        term += hx
+        term *= c
+        to_free[:, r] += term
+        if pcr5:
+            group = xr * yr                              # both sources on θ_a: weight m_1(θ_a) m_2(θ_a)
+            g = c * _share(group, c + group)
+            to_free[:, r] += group * g
+            to_f[r] += c * g.sum(axis=0)
 
 
 # -- the R-weighted rule -------------------------------------------------------------------------------
