@@ -142,6 +142,24 @@ def test_sum_must_be_one_within_1e_9():
             MassFunction({"a": 0.5, "b": 0.5 + off}, frame=AB)
 
 
+
+@pytest.mark.parametrize("off", [4.9e-10, 5.1e-10, 9.9e-10, 1.01e-9, 2.1e-9, -4.9e-10, -9.9e-10, -1.01e-9])
+def test_unions_of_hypotheses_sum_to_one_as_the_exact_sum_says(off):
+    # Unions of hypotheses take a shorter way than the other propositions: both must agree.
+    model = Model.shafer(Frame([f"h{i}" for i in range(10)]))
+    keys = ["h0", "h1|h2", "h3|h4|h5", "h6", "h7|h8|h9", "h1|h9", "h0|h6", "h2|h3"]
+    values = [0.125] * 7 + [0.125 + off]
+    spaced = {f" {key.replace('|', ' | ')} ": v for key, v in zip(keys, values)}
+    elements = {model.frame.element(key): v for key, v in zip(keys, values)}
+    if abs(math.fsum(values) - 1.0) <= 1e-9:
+        m = MassFunction(dict(zip(keys, values)), model=model)
+        assert m == MassFunction(spaced, model=model) == MassFunction(elements, model=model)
+        assert sorted(m.values.tolist()) == sorted(values)
+    else:
+        for masses in (dict(zip(keys, values)), spaced, elements):
+            with pytest.raises(InvalidMassError, match="sum to"):
+                MassFunction(masses, model=model)
+
 @pytest.mark.parametrize(
     ("masses", "fragments"),
     [
