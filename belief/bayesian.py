@@ -76,14 +76,14 @@ __all__ = ["ENGINES", "ClosedFormBatch", "ExclusiveSplit", "exclusive_split", "c
 ENGINES = ("auto", "general", "bayesian")
 
 #: Rows × grid entries per block of the enumerations (a block's temporaries stay in cache).
-BLOCK_ENTRIES = 1 << 19
+BLOCK_ENTRIES = 1 << 18
 #: Rows × |O| × |O| entries per block of the pairwise pass of the R-weighted rule.
-PAIR_BLOCK_ENTRIES = 1 << 19
+PAIR_BLOCK_ENTRIES = 1 << 18
 #: Rows per block of a fusion that reads the sources column by column (a column of a block stays
 #: below the size where the allocator maps fresh pages for every temporary).
 COLUMN_BLOCK_ROWS = 1 << 13
 #: Rows × |O| entries per block of rows of the R-weighted rule's folds.
-ROW_BLOCK_ENTRIES = 1 << 15
+ROW_BLOCK_ENTRIES = 1 << 14
 
 _CONJUNCTIVE = ("conjunctive", "dsmc", "dempster", "yager")
 _PCR = ("pcr5", "pcr6")
@@ -1008,12 +1008,14 @@ class _Fold:
         self.k_f = s * p_f                                     # k of θ_i against F
         self.k_f += f * p
         both = self.w + self.w_f
-        self.complete = complete = bool(both.all())           # m0 weighs every pair θ_i, F
+        floor = bool((both > _RECIPROCAL_FLOOR).all())
+        self.complete = complete = floor or bool(both.all())   # m0 weighs every pair θ_i, F
         if not complete:
             lost = ~(both > 0)
             both[lost] = 1.0                                # w = w_F = 0 there: their shares are 0
-        if bool((both > _RECIPROCAL_FLOOR).all()):
-            inverse = np.reciprocal(both, out=both)         # 1 / (w_i + w_F), one division for both shares
+            floor = bool((both > _RECIPROCAL_FLOOR).all())
+        if floor:
+            inverse = np.divide(1.0, both, out=both)        # 1 / (w_i + w_F), one division for both shares
             self.to_target = self.w * inverse
             self.to_f = self.w_f * inverse
         else:
@@ -1162,7 +1164,7 @@ class _Fold:
         """
         st, p, k_f, rho, r = self.state, self.p, self.k_f, self.rho, self.r
         s = st.s
-        to_singles = _pair_shares(s, p, self.w, self.sigma)
+        to_singles = _pair_shares(s, p, self.w, lambda: self.sigma)
         to_singles += k_f * self.to_target
         to_unions = None if self.to_union is None else k_f * self.to_union
         if positions is None:
@@ -1229,7 +1231,7 @@ class _Fold:
         # where m0 gives neither any weight.
         both = w_j + self.w
         if bool((both > _RECIPROCAL_FLOOR).all()):
-            h = np.reciprocal(both, out=both)
+            h = np.divide(1.0, both, out=both)
             h.reshape(-1)[flat] = 0.0
             to_single = w_j * (s_j * _dot(p, h) + p_j * _dot(s, h))
         else:
@@ -1318,17 +1320,19 @@ class _Fold:
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Σ_i a_i b_i over the hypotheses of (K, B) arrays."""
+    """Σ_i a_i b_i over the hypotheses of (K, B) arrays (one pass, no BLAS)."""
+    if a.ndim == 2 and a.shape == b.shape:
+        return np.einsum("ij,ij->j", a, b)
     return np.add.reduce(a * b, 0)
 
 
-def _pair_shares(s: np.ndarray, p: np.ndarray, w: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+def _pair_shares(s: np.ndarray, p: np.ndarray, w: np.ndarray, sigma: Callable[[], np.ndarray]) -> np.ndarray:
     """Σ_{l≠i} k_il m0(θ_i) / (m0(θ_i) + m0(θ_l)) for every i, k_il = s_i p_l + s_l p_i (support fallback).
 
     The sum does not factorise: one (|O|, |O|) matrix per row, built in blocks of rows.  A
     pair without m0 weight is split σ_i : σ_l instead (SPEC A.4); its k_il is positive
     only if one target has running mass and the other cue mass, which picks the few rows
-    for the second pass.
+    for the second pass.  ``sigma()`` gives the supports σ, formed only if some row needs them.
     """
     out = _share_products(w, s, p, None)
     if w.all():
@@ -1337,46 +1341,57 @@ def _pair_shares(s: np.ndarray, p: np.ndarray, w: np.ndarray, sigma: np.ndarray)
     pending = (absent & (s > 0)).any(axis=0) & (absent & (p > 0)).any(axis=0)
     if pending.any():
         rows = np.flatnonzero(pending)
-        out[:, rows] += _share_products(sigma[:, rows], s[:, rows], p[:, rows], absent[:, rows])
+        out[:, rows] += _share_products(sigma()[:, rows], s[:, rows], p[:, rows], absent[:, rows])
     return out
 
 
 def _share_products(weights: np.ndarray, s: np.ndarray, p: np.ndarray, members: np.ndarray | None) -> np.ndarray:
-    """s_i Σ_l p_l M_il + p_i Σ_l s_l M_il with M_il = x_i / (x_i + x_l) over members i ≠ l (0 if x_i + x_l = 0).
+    """Σ_{l≠i} k_il x_i / (x_i + x_l) for every i, k_il = s_i p_l + s_l p_i, over members i ≠ l (0 if x_i + x_l = 0).
 
-    Blocks of rows whose weights are all above :data:`_RECIPROCAL_FLOOR` use
-    H_il = 1 / (x_i + x_l), so that the sum is x_i (s_i (H p)_i + p_i (H s)_i) less the
-    diagonal's s_i p_i (no 0/0 can occur there, and 1 / (x_i + x_l) stays finite); the others
-    form the ratio x_i / (x_i + x_l) first, which is at most 1 whatever the weights (masses of
-    1e-300 and below, from likelihoods that underflow, cannot overflow it), and mask the pairs
-    without weight.  A block's (|O|, |O|, rows) matrix fits in cache.
+    Both k and D = x_i + x_l are symmetric, so each unordered pair is formed once, the pairs
+    (i, i + d) of one offset d together.  Blocks of rows whose weights are all above
+    :data:`_RECIPROCAL_FLOOR` add G_il = k_il / D_il to both ends and multiply by x_i last
+    (k ≤ 2 and D > 2·10⁻¹⁵⁰ keep G finite); the others form the ratio x_i / D first, which is
+    at most 1 whatever the weights (masses of 1e-300 and below, from likelihoods that
+    underflow, cannot overflow it), and count only the pairs of two members.
     """
     o, n = s.shape
-    out = np.empty((o, n))
+    out = np.zeros((o, n))
+    if o < 2:
+        return out
     block = max(64, PAIR_BLOCK_ENTRIES // max(o * o, 1))
-    diagonal = np.arange(o)
     safe = None if members is not None else (weights > _RECIPROCAL_FLOOR).all(axis=0)
+    size = min(block, n)
+    pair, share, term = np.empty((o - 1, size)), np.empty((o - 1, size)), np.empty((o - 1, size))
     for start in range(0, n, block):
         rows = slice(start, min(n, start + block))
+        b = rows.stop - rows.start
         x = weights[:, rows] if members is None else np.where(members[:, rows], weights[:, rows], 0.0)
-        matrix = np.add(x[:, None], x[None])
-        sr, pr = s[:, rows], p[:, rows]
-        if safe is not None and safe[rows].all():
-            np.reciprocal(matrix, out=matrix)
-            result = sr * np.einsum("iln,ln->in", matrix, pr)
-            result += pr * np.einsum("iln,ln->in", matrix, sr)
-            result *= x
-            result -= sr * pr
-        else:
-            np.maximum(matrix, _TINY, out=matrix)        # x_i ≤ x_i + x_l: only 0/0 pairs change, to 0
-            np.divide(x[:, None], matrix, out=matrix)
+        sr, pr, acc = s[:, rows], p[:, rows], out[:, rows]
+        direct = safe is not None and bool(safe[rows].all())
+        for d in range(1, o):
+            m = o - d
+            d_il, k_il, t = pair[:m, :b], share[:m, :b], term[:m, :b]
+            np.add(x[:m], x[d:], out=d_il)
+            np.multiply(sr[:m], pr[d:], out=k_il)
+            k_il += np.multiply(sr[d:], pr[:m], out=t)
             if members is not None:
-                matrix *= members[:, rows][:, None]
-                matrix *= members[:, rows][None]
-            matrix[diagonal, diagonal] = 0.0
-            result = sr * np.einsum("iln,ln->in", matrix, pr)
-            result += pr * np.einsum("iln,ln->in", matrix, sr)
-        out[:, rows] = result
+                k_il *= members[:m, rows]
+                k_il *= members[d:, rows]
+            if direct:
+                k_il /= d_il
+                acc[:m] += k_il
+                acc[d:] += k_il
+            else:
+                np.maximum(d_il, _TINY, out=d_il)             # x_i ≤ x_i + x_l: only 0/0 pairs change, to 0
+                np.divide(x[:m], d_il, out=t)
+                t *= k_il
+                acc[:m] += t
+                np.divide(x[d:], d_il, out=t)
+                t *= k_il
+                acc[d:] += t
+        if direct:
+            acc *= x
     return out
 
 
@@ -1387,11 +1402,15 @@ def _state_inconsistency(state: _RState, p: np.ndarray, p_f: np.ndarray, r_mode:
     d_f = state.f - p_f
     if r_mode == "paper":
         # Σ_A |Δ(A)|: the cue has mass on singletons only, so the other elements count fully.
-        value = np.add.reduce(np.abs(d), 0) + np.abs(d_f)
+        value = np.add.reduce(np.abs(d, out=d), 0)
+        value += np.abs(d_f, out=d_f)
         if not state.fresh:
             u_total = state.u_total if state.u_total is not None else np.add.reduce(state.u, 0)
-            value += state.q + u_total + state.v + state.e
-        value /= 2.0
+            value += state.q
+            value += u_total
+            value += state.v
+            value += state.e
+        value *= 0.5
         # Disjoint focal sets give exactly R = 1, as belief.rules sets it.  Only rows whose sum
         # is about 1 can be disjoint (each source sums to 1), so only they are checked.
         near = np.flatnonzero(value >= 1.0 - 1e-6)
@@ -1406,7 +1425,9 @@ def _state_inconsistency(state: _RState, p: np.ndarray, p_f: np.ndarray, r_mode:
         value *= 0.5
     else:
         value = 0.5 * _jousselme_form(state, d, d_f, split)
-    return np.sqrt(np.clip(value, 0.0, 1.0))
+    np.maximum(value, 0.0, out=value)
+    np.minimum(value, 1.0, out=value)
+    return np.sqrt(value, out=value)
 
 
 def _jousselme_form(state: _RState, d: np.ndarray, d_f: np.ndarray, split: ExclusiveSplit) -> np.ndarray:
