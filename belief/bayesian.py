@@ -315,6 +315,11 @@ class _Underflow(Exception):
 _RECIPROCAL_FLOOR = 1e-150
 
 
+def _above(values: np.ndarray, floor: float) -> bool:
+    """Whether every value exceeds ``floor`` (NaN does not): one pass, no mask."""
+    return not values.size or bool(values.min() > floor)
+
+
 def _ratio(numerator: np.ndarray, denominator: np.ndarray) -> np.ndarray:
     """numerator / denominator where the denominator is positive, else 0 (never NaN)."""
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -471,7 +476,7 @@ class _Blocks:
             elif v.flags.f_contiguous and np.array_equal(lookup, np.arange(self.width)):
                 out.append(columns[:, rows])                     # already (n, B), rows contiguous
             else:
-                out.append(columns[:, rows].take(lookup, axis=0))
+                out.append(columns[lookup, rows])
         return out
 
     def column(self, k: int, j: int, rows: slice) -> np.ndarray | None:
@@ -957,8 +962,9 @@ class _RState:
 
     @classmethod
     def bayesian(cls, s: np.ndarray, f: np.ndarray) -> "_RState":
-        zero = np.zeros(s.shape[1])
-        zeros = np.zeros(s.shape)
+        # Read-only zeros without memory: a fresh state's other classes are never read per element.
+        zero = np.broadcast_to(0.0, (s.shape[1],))
+        zeros = np.broadcast_to(0.0, s.shape)
         return cls(s, zeros, f, zero, zero, zeros, zero, zeros, zero, fresh=True)
 
 
@@ -1008,12 +1014,12 @@ class _Fold:
         self.k_f = s * p_f                                     # k of θ_i against F
         self.k_f += f * p
         both = self.w + self.w_f
-        floor = bool((both > _RECIPROCAL_FLOOR).all())
+        floor = _above(both, _RECIPROCAL_FLOOR)
         self.complete = complete = floor or bool(both.all())   # m0 weighs every pair θ_i, F
         if not complete:
             lost = ~(both > 0)
             both[lost] = 1.0                                # w = w_F = 0 there: their shares are 0
-            floor = bool((both > _RECIPROCAL_FLOOR).all())
+            floor = _above(both, _RECIPROCAL_FLOOR)
         if floor:
             inverse = np.divide(1.0, both, out=both)        # 1 / (w_i + w_F), one division for both shares
             self.to_target = self.w * inverse
@@ -1131,7 +1137,7 @@ class _Fold:
                 to_f += self.half * q_p_f
             out["f"] = self.w_f + rho * to_f
         if "u" in names:
-            to_unions = np.zeros_like(r) if self.to_union is None else _dot(k_f, self.to_union)
+            to_unions = np.zeros(r.shape) if self.to_union is None else _dot(k_f, self.to_union)
             if not fresh and self.pair_rows.size:
                 to_unions[self.pair_rows] += self._union_fallback(self.pair_rows).sum(axis=0)
             out["u"] = (r * k_f.sum(axis=0) if self.union else 0.0) + rho * to_unions
@@ -1143,14 +1149,14 @@ class _Fold:
                     q_new += r * st.v * self.t
             out["q"] = q_new
         if "v" in names:
-            v_new = np.zeros_like(r)
+            v_new = np.zeros(r.shape)
             if not fresh:
                 v_new += ((r if self.union else 0.0) + rho * self.half) * q_p_f
                 if not st.no_v:
                     v_new += rho * st.v * self.stays
             out["v"] = v_new
         if "e" in names:
-            e_new = np.zeros_like(r) if self.union else r * k_f.sum(axis=0)
+            e_new = np.zeros(r.shape) if self.union else r * k_f.sum(axis=0)
             if not fresh:
                 e_new += st.e * (self.t + self.p_f) + (0.0 if self.union else r * q_p_f)
             out["e"] = e_new
@@ -1182,7 +1188,7 @@ class _Fold:
         qj *= pj
         qj += sj * (t - pj)
         qj *= r
-        vj = np.zeros_like(qj)
+        vj = np.zeros(qj.shape)
         if not st.fresh:
             to_singles += self._unions_to_targets()
             if self.pair_rows.size:
@@ -1230,7 +1236,7 @@ class _Fold:
         # w_J (s_J Σ_l p_l h_l + p_J Σ_l s_l h_l) with h_l = 1 / (w_J + w_l), l ≠ J; by support
         # where m0 gives neither any weight.
         both = w_j + self.w
-        if bool((both > _RECIPROCAL_FLOOR).all()):
+        if _above(both, _RECIPROCAL_FLOOR):
             h = np.divide(1.0, both, out=both)
             h.reshape(-1)[flat] = 0.0
             to_single = w_j * (s_j * _dot(p, h) + p_j * _dot(s, h))
@@ -1360,7 +1366,7 @@ def _share_products(weights: np.ndarray, s: np.ndarray, p: np.ndarray, members: 
     if o < 2:
         return out
     block = max(64, PAIR_BLOCK_ENTRIES // max(o * o, 1))
-    safe = None if members is not None else (weights > _RECIPROCAL_FLOOR).all(axis=0)
+    safe = None if members is not None or not n else np.min(weights, axis=0) > _RECIPROCAL_FLOOR
     size = min(block, n)
     pair, share, term = np.empty((o - 1, size)), np.empty((o - 1, size)), np.empty((o - 1, size))
     for start in range(0, n, block):
