@@ -82,8 +82,10 @@ PAIR_BLOCK_ENTRIES = 1 << 18
 #: Rows per block of a fusion that reads the sources column by column (a column of a block stays
 #: below the size where the allocator maps fresh pages for every temporary).
 COLUMN_BLOCK_ROWS = 1 << 13
-#: Rows × |O| entries per block of rows of the R-weighted rule's folds.
-ROW_BLOCK_ENTRIES = 1 << 14
+#: Rows × n entries per block of rows of the R-weighted rule's folds and of PCR: each array of a
+#: block stays a few hundred kB at most, long enough to spread numpy's per-call overhead, short
+#: enough that the fold's temporaries are recycled by the allocator rather than mapped afresh.
+ROW_BLOCK_ENTRIES = 22_000
 
 _CONJUNCTIVE = ("conjunctive", "dsmc", "dempster", "yager")
 _PCR = ("pcr5", "pcr6")
