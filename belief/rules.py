@@ -36,7 +36,7 @@ from belief.batch import SUM_TOLERANCE, MassBatch, check_refines
 from belief.bayesian import ENGINES
 from belief.errors import BeliefError, FrameError, InvalidMassError, ModelError, TotalConflictError
 from belief.frame import Element
-from belief.mass import MassFunction, _set, _union_context
+from belief.mass import MassFunction, _FreshMass, _new, _set, _union_context
 from belief.model import Model
 from belief.plan import (Encoding, FoldBudget, Scatter, TuplePlan, _exclusive, canonical_codes, check_joint,
                          coded_fast, decode, encode, evict, gather_product, plan_lookup, row_chunks, sighted,
@@ -240,7 +240,7 @@ def combine(*sources: Source, rule: Union[str, RuleInfo] = "dempster", model: Mo
         if not options:
             fused = _single(info, sources, model)
             if fused is not None:
-                return _renormalised(fused, len(sources[0]) if len(sources) == 1 else len(sources))
+                return fused
     else:
         bayesian.check_engine(engine)
     unknown = set(options) - set(info.options)
@@ -728,7 +728,7 @@ def _single(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> M
     Dempster's rule with a non-empty mass below :data:`WIDE_SCALE` (total conflict, or
     products that may have underflowed) go the general way (None).  Each step adds the same
     products in the same order as the plan of :mod:`belief.plan`, so the results are the
-    same to the last bit.
+    same to the last bit.  The result is final: rescaled as :func:`_renormalised` says.
     """
     kind = _SINGLE_RULES.get(info.function)
     if kind is None:
@@ -745,6 +745,15 @@ def _single(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> M
                     and source_model._unions and source_model.kind == "shafer"):
                 return _pair_loop(source_model, kind, masks1, a._floats or a._union_floats(), masks2,
                                   b._floats or b._union_floats(), a)
+    fused = _single_any(kind, info, sources, model)
+    if fused is None:
+        return None
+    # A pair of a few tuples there is final already; renormalising it again leaves it as it is.
+    return _renormalised(fused, len(sources[0]) if len(sources) == 1 else len(sources))
+
+
+def _single_any(kind: str, info: RuleInfo, sources: Sequence[Source], model: Model | None) -> MassFunction | None:
+    """:func:`_single` past its commonest call: a result to renormalise, or None."""
     if len(sources) == 1 and isinstance(sources[0], (list, tuple)):
         sources = sources[0]
     if len(sources) < 2 or type(sources[0]) is not MassFunction:
@@ -858,6 +867,9 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
     ``owner`` (the first mass function) remembers its partner's focal elements: when the
     same two meet again, the grouping of the tuples is made once and kept on it
     (:func:`_pair_table`), and later calls only multiply and add.
+
+    The result is final: normalised for Dempster's rule, else rescaled where
+    :func:`_renormalised` would rescale it, zeros dropped.
     """
     key = "join" if kind == "join" else "meet"
     if owner is not None:
@@ -874,47 +886,75 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
     if kind == "join":
         for a, p in zip(masks1, values1):
             for b, q in zip(masks2, values2):
-                v = p * q
-                group = get(a | b)
+                c = a | b
+                group = get(c)
                 if group is None:
-                    groups[a | b] = v           # one product: no list
+                    groups[c] = p * q           # one product: no list
                 elif type(group) is float:
-                    groups[a | b] = [group, v]
+                    groups[c] = [group, p * q]
                 else:
-                    group.append(v)
+                    group.append(p * q)
     else:
         for a, p in zip(masks1, values1):
             for b, q in zip(masks2, values2):
-                v = p * q
-                group = get(a & b)
+                c = a & b
+                group = get(c)
                 if group is None:
-                    groups[a & b] = v
+                    groups[c] = p * q
                 elif type(group) is float:
-                    groups[a & b] = [group, v]
+                    groups[c] = [group, p * q]
                 else:
-                    group.append(v)
+                    group.append(p * q)
     normalise = kind == "dempster" and 0 in groups
     if normalise:
         del groups[0]
     sums = [group if type(group) is float else group[0] + group[1] if len(group) == 2 else fsum(group)
             for group in groups.values()]
-    return _pair_result(model, list(groups), sums, normalise, min(values1) * min(values2) > 0)
+    # _pair_result inlined, and the new mass function made in place: a first call on new
+    # focal elements pays for every function it enters.
+    focal = list(groups)
+    scale = fsum(sums)
+    if normalise:
+        if not scale > WIDE_SCALE:
+            return None
+        sums = [x / scale for x in sums]
+    elif RESULT_TOLERANCE < abs(scale - 1.0) <= _PAIR_REACH:
+        sums = [x / scale for x in sums]
+    if not min(values1) * min(values2) > 0 and not all(x > 0 for x in sums):    # see _pair_result
+        pairs = [(f, x) for f, x in zip(focal, sums) if x > 0]
+        focal = [f for f, _ in pairs]
+        sums = [x for _, x in pairs]
+    out = _new(_FreshMass)
+    out.model = model
+    out._focal = out._values = out._batch = out._hash = out._memo = None
+    out._masks = focal
+    out._floats = sums
+    out._loose = True
+    out.__class__ = MassFunction
+    return out
+
+
+#: What :func:`_renormalised` rescales in the result of two sources.
+_PAIR_REACH = 4 * SUM_TOLERANCE
 
 
 def _pair_result(model: Model, focal: list, sums: list, normalise: bool, positive: bool) -> MassFunction | None:
-    """The mass function of a pair's sums per target: normalised for Dempster's rule, zeros dropped.
+    """The mass function of a pair's sums per target, final (see :func:`_pair_loop`).
 
     None where Dempster's normalisation would divide by a non-empty mass below
     :data:`WIDE_SCALE` (underflow or total conflict: the general path tells which).
     ``positive``: the product of the smallest masses of the two sources is positive.
     """
+    scale = fsum(sums)
     if normalise:
-        scale = fsum(sums)
         if not scale > WIDE_SCALE:
             return None
         sums = [x / scale for x in sums]
+    elif RESULT_TOLERANCE < abs(scale - 1.0) <= _PAIR_REACH:
+        sums = [x / scale for x in sums]
     # Masses are positive: if the product of the smallest two is, so is every product, every sum
-    # and every quotient by a scale of at most one (rounding is monotone), and no zero is dropped.
+    # and every quotient by a scale of at most 1 + _PAIR_REACH (rounding is monotone), and no
+    # zero is dropped.
     if not positive and not all(x > 0 for x in sums):
         pairs = [(f, x) for f, x in zip(focal, sums) if x > 0]
         return MassFunction._from_masks(model, [f for f, _ in pairs], [x for _, x in pairs], True)
