@@ -15,12 +15,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
+from functools import lru_cache
 
 from hypothesis import assume
 from hypothesis import strategies as st
 
 from belief import Element, Frame, MassFunction, Model
 from belief import testing
+
+# Building a strategy costs far more than drawing from it (Hypothesis validates it and works out
+# its properties on first use), so every strategy below is built once for its arguments and
+# reused: the composites would otherwise build several new ones for every example they draw.
+_memo = lru_cache(maxsize=None)
 
 # -- literal Venn-region semantics ---------------------------------------------------------------
 
@@ -102,22 +108,26 @@ class ModelCase:
 # -- strategies ---------------------------------------------------------------------------------------
 
 
+@_memo
 def frames(min_n: int = 1, max_n: int = 5):
     """Frames t1 .. tn, min_n ≤ n ≤ max_n (:func:`belief.testing.frames`, up to five hypotheses by default)."""
     return testing.frames(min_n, max_n)
 
 
+@_memo
 def conjunctions(n: int):
     """A non-empty conjunction mask of an n-hypothesis frame."""
     return st.integers(1, (1 << n) - 1)
 
 
+@_memo
 def elements(frame: Frame, max_terms: int = 4):
     """Arbitrary elements of D^Θ (the empty one included), from random conjunctions."""
     n = len(frame)
     return st.lists(conjunctions(n), max_size=max_terms).map(lambda terms: Element(frame, terms))
 
 
+@_memo
 def expressions(n: int, max_leaves: int = 8):
     """Expression trees over θ_0..θ_{n-1}: ("h", i), ("empty",), ("&", x, y), ("|", x, y)."""
     leaves = st.integers(0, n).map(lambda i: ("empty",) if i == n else ("h", i))
@@ -170,21 +180,39 @@ def expression_text(expr, frame: Frame, *, unicode: bool = False, minimal_parent
     return write(expr, False)
 
 
+@_memo
+def _propositions(n: int, max_constraints: int):
+    return st.lists(st.lists(conjunctions(n), min_size=1, max_size=2), max_size=max_constraints)
+
+
+@_memo
 @st.composite
 def hybrid_cases(draw, frame: Frame, max_constraints: int = 3) -> ModelCase:
     """A hybrid model declaring a few random propositions (unions of conjunctions) empty."""
     n = len(frame)
-    props = draw(st.lists(st.lists(conjunctions(n), min_size=1, max_size=2), max_size=max_constraints))
+    props = draw(_propositions(n, max_constraints))
     texts = ["|".join(term_text(frame, t) for t in prop) for prop in props]
     empty_terms = [t for prop in props for t in prop]
     return ModelCase(Model.hybrid(frame, texts), hybrid_allowed(n, empty_terms), f"hybrid {texts}")
 
 
+@_memo
+def _sampled(values: tuple):
+    return st.sampled_from(values)
+
+
+@_memo
+def weight_lists(low: int, high: int, size: int):
+    """Exactly ``size`` integer weights in [low, high]."""
+    return st.lists(st.integers(low, high), min_size=size, max_size=size)
+
+
+@_memo
 @st.composite
 def model_cases(draw, frame: Frame, kinds=("free", "shafer", "hybrid", "tracking")) -> ModelCase:
     n = len(frame)
     choices = [k for k in kinds if k != "tracking" or n >= 2]
-    kind = draw(st.sampled_from(choices))
+    kind = draw(_sampled(tuple(choices)))
     if kind == "free":
         return ModelCase(Model.free(frame), free_allowed(n), "free")
     if kind == "shafer":
@@ -195,6 +223,7 @@ def model_cases(draw, frame: Frame, kinds=("free", "shafer", "hybrid", "tracking
     return ModelCase(Model.tracking(frame, frame.hypotheses[fa]), tracking_allowed(n, fa), f"tracking FA={fa}")
 
 
+@_memo
 def any_model_cases(min_n: int = 1, max_n: int = 5, kinds=("free", "shafer", "hybrid", "tracking")):
     return frames(min_n, max_n).flatmap(lambda f: model_cases(f, kinds))
 
@@ -220,26 +249,39 @@ def _normalised(weights: list[int]) -> list[float]:
     return [w / total for w in weights]
 
 
-@st.composite
-def _entries(draw, case: ModelCase, max_focal: int, subnormal: bool) -> tuple[tuple[Element, float], ...]:
+@_memo
+def _entry_focals(case: ModelCase, max_focal: int):
     frame = case.frame
     # half of the conjunctions are drawn among the allowed regions, so that few are rejected
     term = st.one_of(st.sampled_from(sorted(case.allowed)), conjunctions(case.n))
     candidates = (st.lists(term, min_size=1, max_size=3)
                   .map(lambda terms: Element(frame, terms))
                   .filter(lambda e: bool(case.regions(e))))
-    focal = draw(st.lists(candidates, min_size=1, max_size=max_focal, unique=True))
+    return st.lists(candidates, min_size=1, max_size=max_focal, unique=True)
+
+
+@_memo
+def _empty_extras(extras: tuple):
+    return st.lists(st.sampled_from(extras), min_size=1, max_size=2, unique=True)
+
+
+@_memo
+@st.composite
+def _entries(draw, case: ModelCase, max_focal: int, subnormal: bool) -> tuple[tuple[Element, float], ...]:
+    frame = case.frame
+    focal = draw(_entry_focals(case, max_focal))
     if subnormal:
         # mass on ∅ itself and/or on an element that the model declares empty
         extras = [frame.empty]
-        empty_terms = [t for t in range(1, 1 << case.n) if t not in case.allowed]
+        empty_terms = tuple(t for t in range(1, 1 << case.n) if t not in case.allowed)
         if empty_terms:
-            extras.append(Element(frame, [draw(st.sampled_from(empty_terms))]))
-        focal += draw(st.lists(st.sampled_from(extras), min_size=1, max_size=2, unique=True))
-    weights = draw(st.lists(st.integers(1, 20), min_size=len(focal), max_size=len(focal)))
+            extras.append(Element(frame, [draw(_sampled(empty_terms))]))
+        focal += draw(_empty_extras(tuple(extras)))
+    weights = draw(weight_lists(1, 20, len(focal)))
     return tuple(zip(focal, _normalised(weights)))
 
 
+@_memo
 @st.composite
 def mass_cases(draw, min_n: int = 1, max_n: int = 4, kinds=("free", "shafer", "hybrid", "tracking"),
                subnormal=False, max_focal: int = 5) -> MassCase:
@@ -255,11 +297,13 @@ def mass_cases(draw, min_n: int = 1, max_n: int = 4, kinds=("free", "shafer", "h
 
 
 
+@_memo
 def mass_cases_under(case: ModelCase, subnormal=None, max_focal: int = 4):
     """Random mass functions under the given model (``subnormal`` as for :func:`mass_cases`)."""
     flags = st.booleans() if subnormal is None else st.just(subnormal)
     return flags.flatmap(lambda sub: _entries(case, max_focal, sub).map(lambda entries: MassCase(case, entries, sub)))
 
+@_memo
 @st.composite
 def mass_case_lists(draw, min_n: int = 1, max_n: int = 4, size: int = 4,
                     kinds=("free", "shafer", "hybrid", "tracking"), max_focal: int = 4) -> list[MassCase]:
@@ -273,6 +317,12 @@ def mass_case_lists(draw, min_n: int = 1, max_n: int = 4, size: int = 4,
 # -- sources for the combination rules ------------------------------------------------------------------
 
 
+@_memo
+def _extra_conjunctions(n: int):
+    return st.lists(conjunctions(n), min_size=1, max_size=2)
+
+
+@_memo
 @st.composite
 def stricter_cases(draw, case: ModelCase) -> ModelCase:
     """A model at least as strict as ``case`` (it forbids every region that ``case`` forbids).
@@ -287,20 +337,20 @@ def stricter_cases(draw, case: ModelCase) -> ModelCase:
     fas = [i for i in range(n) if n >= 2 and tracking_allowed(n, i) <= case.allowed]
     if fas:
         options.append("tracking")
-    kind = draw(st.sampled_from(options))
+    kind = draw(_sampled(tuple(options)))
     if kind == "shafer":
         return ModelCase(Model.shafer(frame), shafer_allowed(n), "shafer")
     if kind == "tracking":
-        fa = draw(st.sampled_from(fas))
+        fa = draw(_sampled(tuple(fas)))
         return ModelCase(Model.tracking(frame, frame.hypotheses[fa]), tracking_allowed(n, fa), f"tracking FA={fa}")
-    extra = draw(st.lists(conjunctions(n), min_size=1, max_size=2))
+    extra = draw(_extra_conjunctions(n))
     texts = [term_text(frame, t) for t in (*case.model.forbidden, *extra)]
     return ModelCase(Model.hybrid(frame, texts), case.allowed & hybrid_allowed(n, extra),
                      f"{case.label} then hybrid {texts}")
 
 
-@st.composite
-def focal_lists(draw, case: ModelCase, max_focal: int, prefer=frozenset()) -> list[Element]:
+@_memo
+def focal_lists(case: ModelCase, max_focal: int, prefer=frozenset()):
     """Distinct elements that are not empty under ``case`` (conjunctions drawn partly from ``prefer``)."""
     frame = case.frame
     pools = [st.sampled_from(sorted(case.allowed)), conjunctions(case.n)]
@@ -309,7 +359,7 @@ def focal_lists(draw, case: ModelCase, max_focal: int, prefer=frozenset()) -> li
     candidates = (st.lists(st.one_of(*pools), min_size=1, max_size=3)
                   .map(lambda terms: Element(frame, terms))
                   .filter(lambda e: bool(case.regions(e))))
-    return draw(st.lists(candidates, min_size=1, max_size=max_focal, unique=True))
+    return st.lists(candidates, min_size=1, max_size=max_focal, unique=True)
 
 
 @dataclass(frozen=True)
@@ -337,6 +387,7 @@ def exact_weights(weights: list[int]) -> list[Fraction]:
     return [Fraction(w, total) for w in weights]
 
 
+@_memo
 @st.composite
 def fusion_cases(draw, min_sources: int = 2, max_sources: int = 4, min_n: int = 1, max_n: int = 4,
                  kinds=("free", "shafer", "hybrid", "tracking"), dynamic=False, max_focal: int = 3) -> FusionCase:
@@ -353,7 +404,7 @@ def fusion_cases(draw, min_sources: int = 2, max_sources: int = 4, min_n: int = 
     sources = []
     for _ in range(count):
         focal = draw(focal_lists(case, max_focal, prefer=fusion.allowed))
-        weights = draw(st.lists(st.integers(1, 12), min_size=len(focal), max_size=len(focal)))
+        weights = draw(weight_lists(1, 12, len(focal)))
         sources.append(tuple(zip(focal, exact_weights(weights))))
     return FusionCase(case, fusion, tuple(sources))
 
@@ -391,6 +442,12 @@ class SubsetMass:
                             model=self.model, subnormal=True)
 
 
+@_memo
+def _subset_lists(full: int, max_focal: int):
+    return st.lists(st.integers(1, full), min_size=1, max_size=max_focal)
+
+
+@_memo
 @st.composite
 def subset_masses(draw, frame: Frame | None = None, min_n: int = 1, max_n: int = 4, max_focal: int = 5,
                   total=None, empty=None) -> SubsetMass:
@@ -403,7 +460,7 @@ def subset_masses(draw, frame: Frame | None = None, min_n: int = 1, max_n: int =
         frame = draw(frames(min_n, max_n))
     n = len(frame)
     full = (1 << n) - 1
-    chosen = set(draw(st.lists(st.integers(1, full), min_size=1, max_size=max_focal)))
+    chosen = set(draw(_subset_lists(full, max_focal)))
     if empty is None:
         empty = draw(st.booleans())
     if empty:
@@ -418,10 +475,11 @@ def subset_masses(draw, frame: Frame | None = None, min_n: int = 1, max_n: int =
             chosen.add(draw(st.integers(1, full - 1)) if full > 1 else 0)
     assume(chosen and (empty is not False or chosen - {0}))
     focal = sorted(chosen)
-    weights = draw(st.lists(st.integers(1, 12), min_size=len(focal), max_size=len(focal)))
+    weights = draw(weight_lists(1, 12, len(focal)))
     return SubsetMass(frame, tuple(zip(focal, exact_weights(weights))))
 
 
+@_memo
 @st.composite
 def subset_mass_lists(draw, min_sources: int = 2, max_sources: int = 3, min_n: int = 1, max_n: int = 3,
                       max_focal: int = 4, total=None, empty=None) -> list[SubsetMass]:

@@ -176,6 +176,10 @@ def joint(sources: list[MassFunction], rule: str, model: Model) -> dict:
 MODELS = [Model.shafer(Frame(["a", "b", "c"])), Model.free(Frame(["a", "b", "c"])),
           Model.hybrid(Frame(["a", "b", "c"]), ["a&b"])]
 POOL = ["a", "b", "c", "a|b", "b|c", "a&b", "a&c", "a|b|c", "a&b&c", "c|a&b"]
+# Strategies are built once and reused: building one costs more than drawing from it.
+FREE_NAMES = st.lists(st.sampled_from(POOL), min_size=1, max_size=4, unique=True)
+SHAFER_NAMES = st.lists(st.sampled_from(POOL[:4] + ["a|b|c"]), min_size=1, max_size=4, unique=True)
+WEIGHT_LISTS = {size: st.lists(st.floats(0.05, 1.0), min_size=size, max_size=size) for size in range(1, 5)}
 
 
 @pytest.mark.parametrize("rule", ["dempster", "conjunctive", "disjunctive", "dsmc"])
@@ -185,9 +189,8 @@ def test_the_pairwise_fold_equals_the_joint_enumeration(rule, data):
     model = data.draw(st.sampled_from(MODELS), label="model")
     sources = []
     for _ in range(data.draw(st.integers(2, 5), label="sources")):
-        names = data.draw(st.lists(st.sampled_from(POOL if model.kind != "shafer" else POOL[:4] + ["a|b|c"]),
-                                   min_size=1, max_size=4, unique=True))
-        weights = data.draw(st.lists(st.floats(0.05, 1.0), min_size=len(names), max_size=len(names)))
+        names = data.draw(FREE_NAMES if model.kind != "shafer" else SHAFER_NAMES)
+        weights = data.draw(WEIGHT_LISTS[len(names)])
         total = math.fsum(weights)
         masses = {n: w / total for n, w in zip(names, weights)}
         sources.append(MassFunction(masses, model=Model.free(model.frame)).under(model))
@@ -206,15 +209,22 @@ OUTPUT_RULES = ("conjunctive", "dempster", "disjunctive", "yager", "dubois_prade
                 "average", "murphy", "pcr6_plus")
 
 
+OUTPUT_NAMES = st.lists(st.sampled_from(["a", "b", "c", "a|b", "b|c", "a|b|c"]), min_size=1, max_size=4, unique=True)
+OFFSETS = st.sampled_from([1.0 + 0.9 * SUM_TOLERANCE, 1.0 - 0.9 * SUM_TOLERANCE, 1.0])
+
+
 @st.composite
 def off_by_the_tolerance(draw):
     """A mass function whose masses sum to one within the accepted tolerance, not closer."""
-    names = draw(st.lists(st.sampled_from(["a", "b", "c", "a|b", "b|c", "a|b|c"]), min_size=1, max_size=4,
-                          unique=True))
-    weights = draw(st.lists(st.floats(0.05, 1.0), min_size=len(names), max_size=len(names)))
+    names = draw(OUTPUT_NAMES)
+    weights = draw(WEIGHT_LISTS[len(names)])
     total = math.fsum(weights)
-    off = draw(st.sampled_from([1.0 + 0.9 * SUM_TOLERANCE, 1.0 - 0.9 * SUM_TOLERANCE, 1.0]))
+    off = draw(OFFSETS)
     return MassFunction({n: w / total * off for n, w in zip(names, weights)}, model=SHAFER)
+
+
+OFF_BY_THE_TOLERANCE = off_by_the_tolerance()
+SOURCE_COUNTS = st.integers(2, 3)
 
 
 @pytest.mark.parametrize("rule", OUTPUT_RULES)
@@ -223,7 +233,7 @@ def off_by_the_tolerance(draw):
 def test_combined_results_are_valid_inputs_again(rule, data):
     result = None
     for _ in range(3):
-        sources = [data.draw(off_by_the_tolerance()) for _ in range(data.draw(st.integers(2, 3)))]
+        sources = [data.draw(OFF_BY_THE_TOLERANCE) for _ in range(data.draw(SOURCE_COUNTS))]
         if result is not None:
             sources[0] = result
         try:
@@ -233,7 +243,7 @@ def test_combined_results_are_valid_inputs_again(rule, data):
         assert abs(math.fsum(result.values) - 1.0) <= 1e-12
         again = MassFunction(result.to_mapping(), model=SHAFER, subnormal=True)
         assert again.isclose(result)
-    batches = [MassBatch.from_mass_functions([data.draw(off_by_the_tolerance()) for _ in range(3)])
+    batches = [MassBatch.from_mass_functions([data.draw(OFF_BY_THE_TOLERANCE) for _ in range(3)])
                for _ in range(3)]
     try:
         fused = combine(*batches, rule=rule)

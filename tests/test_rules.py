@@ -34,6 +34,7 @@ from tests.strategies import (
     mass_cases,
     mass_cases_under,
     minimal_regions,
+    weight_lists,
 )
 
 # -- slow, literal reference implementation ---------------------------------------------------------
@@ -348,7 +349,7 @@ def batch_cases(draw, max_sources: int = 3, max_rows: int = 4):
         table = []
         one_row = draw(st.integers(0, 4)) == 0   # now and then a one-row batch, broadcast
         for _ in range(1 if one_row else rows):
-            weights = draw(st.lists(st.integers(0, 9), min_size=len(focal), max_size=len(focal)))
+            weights = draw(weight_lists(0, 9, len(focal)))
             if not any(weights):
                 weights[-1] = 1
             table.append([float(f) for f in exact_weights(weights)])
