@@ -357,7 +357,11 @@ class _Fusion:
 
     rows: int
     split: ExclusiveSplit
+    sources: "_Blocks"
     general: Callable[[np.ndarray], MassBatch] | None = None
+    _picks: tuple[bytes, list[np.ndarray]] | None = None
+    #: BetP's divisor, once checked for total conflict (False: no row has m(∅) > 0).
+    _betp_scale: np.ndarray | bool | None = None
 
     def empty(self) -> np.ndarray:
         raise NotImplementedError
@@ -371,11 +375,6 @@ class _Fusion:
 
     def e_measure(self, kind: str) -> np.ndarray:
         raise NotImplementedError
-
-    sources: "_Blocks"
-    _picks: tuple[bytes, list[np.ndarray]] | None = None
-    #: BetP's divisor, once checked for total conflict (False: no row has m(∅) > 0).
-    _betp_scale: np.ndarray | bool | None = None
 
     def picked(self, positions: np.ndarray) -> list[np.ndarray]:
         """Each source's mass of θ_j, j the free hypothesis ``positions[n]``, in row n; shape (N,) each.
@@ -448,6 +447,8 @@ class _Blocks:
                 lookup[mapping[0]] = mapping[1]
             self.lookup.append(lookup)
         self.complete = [bool((lookup >= 0).all()) for lookup in self.lookup]
+        in_order = np.arange(width)
+        self.in_order = [np.array_equal(lookup, in_order) for lookup in self.lookup]
 
     def __iter__(self):
         for start in range(0, self.rows, self.step):
@@ -475,7 +476,7 @@ class _Blocks:
                 present = lookup >= 0
                 block[present] = columns[:, rows].take(lookup[present], axis=0)
                 out.append(block)
-            elif v.flags.f_contiguous and np.array_equal(lookup, np.arange(self.width)):
+            elif v.flags.f_contiguous and self.in_order[k]:
                 out.append(columns[:, rows])                     # already (n, B), rows contiguous
             else:
                 out.append(columns[lookup, rows])
@@ -523,10 +524,6 @@ class _Blocks:
             if column is not None:
                 out[i] = column
         return out
-
-    def gather(self, k: int, frame_columns: np.ndarray) -> np.ndarray:
-        """The mass of θ_{frame_columns[n]} in row n of source k, shape (N,)."""
-        return self.gather_source(k, self.lookup[k].take(frame_columns))
 
     def gather_source(self, k: int, columns: np.ndarray) -> np.ndarray:
         """The mass in column ``columns[n]`` of source k (−1: none, mass 0) in row n, shape (N,)."""
@@ -576,7 +573,12 @@ def _first_pick(free: Sequence[np.ndarray], totals: Sequence[np.ndarray]) -> np.
 
 def _pick(values: np.ndarray, positions: np.ndarray) -> np.ndarray:
     """values[positions[n], n] for every row n of a (K, N) array."""
-    return values[positions, np.arange(positions.size)]
+    n = positions.size
+    if values.flags.c_contiguous and values.shape[1] == n:
+        flat = np.multiply(positions, n)
+        flat += _row_offsets(n, 1)
+        return values.reshape(-1).take(flat)
+    return values[positions, np.arange(n)]
 
 
 # -- conjunctive family ------------------------------------------------------------------------------
@@ -622,6 +624,8 @@ class ConjunctiveFusion(_Fusion):
                 np.multiply(excl[0], excl[1], out=self.exclusive[:, rows])
                 for e in excl[2:]:
                     self.exclusive[:, rows] *= e
+            else:
+                self.exclusive[:, rows] = excl[0]
             self.conflict[rows] = _conflict(excl, totals, [None if z is None else z[rows] for z in empties])
         self.all_free = _product(list(self.totals))                # P_O = Π_i O_i
         self.scale = np.add.reduce(self.exclusive, axis=0)         # Σ of the non-empty masses
@@ -751,6 +755,7 @@ class PCRFusion(_Fusion):
         self.s = len(values)
         self._parts: dict | None = None
         self._cache: dict = {}
+        self._share: tuple[bytes, np.ndarray, np.ndarray | None] | None = None
 
     def parts(self) -> dict:
         """Per row: O_i, P_O, Π_i m_i(θ_e), and what the conflicting tuples give back to each hypothesis."""
@@ -787,10 +792,20 @@ class PCRFusion(_Fusion):
         if kind == "pls":
             out = parts["spread"]
         elif positions is not None:
-            columns = np.asarray(self.split.free)[positions]
-            free = [self.sources.gather(k, columns) for k in range(self.s)]
-            out = self._measure(kind, free, list(parts["totals"]), _pick(parts["to_free"], positions),
-                                parts["spread"])
+            free = self.picked(positions)
+            if self._share is None or self._share[0] != key[1]:
+                self._share = (key[1], _pick(parts["to_free"], positions), None)
+            share = self._share[1]
+            if kind == "mass":
+                out = _product(free) + share
+            else:
+                # Bel and BetP of one selection share the sum over the first source that picks θ_j.
+                if self._share[2] is None:
+                    bel = _first_pick(free, list(parts["totals"]))
+                    bel += share
+                    self._share = (key[1], share, bel)
+                bel = self._share[2]
+                out = bel.copy() if kind == "bel" else 0.5 * (parts["spread"] + bel)
         else:
             out = np.empty((len(self.split.free), self.rows))
             for rows in self.sources:
