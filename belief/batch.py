@@ -203,10 +203,28 @@ def check_masses(values: np.ndarray, focal: Sequence[Element], model: Model, sub
                     )
 
 
+def exact_sum(values) -> float:
+    """The correctly rounded sum of finite floats (``math.fsum``); ``inf`` where it exceeds the float range.
+
+    ``math.fsum`` raises ``OverflowError`` when the partial sums of finite values overflow
+    (two masses of 1e308); such masses are invalid, and the sum check reports them.
+
+    Examples
+    --------
+    >>> exact_sum([0.1] * 10), exact_sum([1e308, 1e308])
+    (1.0, inf)
+    """
+    try:
+        return math.fsum(values)
+    except OverflowError:
+        return math.inf
+
+
 def _row_sums(values: np.ndarray) -> np.ndarray:
     if values.shape[1] <= 64 and values.shape[0] <= 64:
-        return np.array([math.fsum(row) for row in values.tolist()], dtype=np.float64)
-    return values.sum(axis=1)
+        return np.array([exact_sum(row) for row in values.tolist()], dtype=np.float64)
+    with np.errstate(over="ignore"):                   # a sum past the float range is inf, and refused
+        return values.sum(axis=1)
 
 
 def check_select(select, n_rows: int, n_queries: int) -> np.ndarray:

@@ -14,7 +14,7 @@ from typing import Any, Union
 
 import numpy as np
 
-from belief.batch import SUM_TOLERANCE, MassBatch, check_cardinality_range, check_masses, resolve_model
+from belief.batch import SUM_TOLERANCE, MassBatch, check_cardinality_range, check_masses, exact_sum, resolve_model
 from belief.errors import FormatError, InvalidMassError
 from belief.frame import Element, Frame, make_elements
 from belief.model import Model, _show
@@ -112,7 +112,7 @@ class MassFunction(_MassSlots):
                     if masks and len(set(masks)) == len(masks):
                         values = list(masses.values())
                         off = abs(sum(values) - 1.0)
-                        if off <= _SURELY_ONE or off <= _MAYBE_ONE and abs(math.fsum(values) - 1.0) <= SUM_TOLERANCE:
+                        if off <= _SURELY_ONE or off <= _MAYBE_ONE and abs(exact_sum(values) - 1.0) <= SUM_TOLERANCE:
                             if type(self) is MassFunction:
                                 # Plain stores on the twin class (see _from_masks), then back to MassFunction.
                                 _set(self, "__class__", _FreshMass)
@@ -198,7 +198,7 @@ class MassFunction(_MassSlots):
             seen.add(terms)
             if value > 0.0:
                 items.append((terms, value))
-        if not items or abs(math.fsum([v for _, v in items]) - 1.0) > SUM_TOLERANCE:
+        if not items or abs(exact_sum([v for _, v in items]) - 1.0) > SUM_TOLERANCE:
             return False
         if single:
             # Unions of hypotheses: the canonical order is by the number of hypotheses, then their positions.
@@ -237,7 +237,7 @@ class MassFunction(_MassSlots):
             else:
                 element = model.reduce(element)
             merged.setdefault(element, []).append(mass)
-        items = sorted(((e, math.fsum(v)) for e, v in merged.items()), key=lambda ev: ev[0].sort_key)
+        items = sorted(((e, exact_sum(v)) for e, v in merged.items()), key=lambda ev: ev[0].sort_key)
         if not items:
             raise InvalidMassError("a mass function needs at least one focal element")
         focal = tuple(e for e, _ in items)
@@ -663,7 +663,7 @@ def _spaced_unions(mass: MassFunction, masses: Mapping, model: Model, bit: dict[
         masks.append(mask)
         values.append(value)
     if not masks or len(set(masks)) != len(masks) or not min(values) >= 0.0 \
-            or not abs(math.fsum(values) - 1.0) <= SUM_TOLERANCE:
+            or not abs(exact_sum(values) - 1.0) <= SUM_TOLERANCE:
         return False
     if 0.0 in values:
         masks = [m for m, v in zip(masks, values) if v > 0.0]

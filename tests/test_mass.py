@@ -2,6 +2,7 @@
 
 import json
 import math
+import warnings
 from fractions import Fraction
 
 import numpy as np
@@ -870,3 +871,18 @@ def test_pickle_round_trip_in_a_fresh_interpreter(tmp_path):
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           env={**os.environ, **env}, check=False)
     assert proc.returncode == 0, proc.stderr
+
+
+@pytest.mark.parametrize("build", [
+    lambda: MassFunction({"a": 1e308, "b": 1e308}, frame=AB),
+    lambda: MassFunction({"a": 1e308, "a|b": 1e308}, frame=AB),
+    lambda: MassFunction({AB["a"]: 1e308, AB["b"]: 1e308}, frame=AB),
+    lambda: MassFunction.from_json('{"frame": ["a", "b"], "mass": {"a": 1e308, "b": 1e308}}'),
+    lambda: MassBatch(["a", "b"], [[1e308, 1e308]], frame=AB),
+    lambda: MassBatch(["a", "b"], [[1e308, 1e308]] * 100, frame=AB),
+])
+def test_finite_masses_whose_sum_overflows_are_refused_as_invalid_masses(build):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                   # no overflow warning on the way either
+        with pytest.raises(InvalidMassError, match="sum to inf"):
+            build()
