@@ -1037,15 +1037,14 @@ class _Fold:
             lost = ~(both > 0)
             both[lost] = 1.0                                # w = w_F = 0 there: their shares are 0
             floor = _above(both, _RECIPROCAL_FLOOR)
+        self._both, self._inverse = both, floor
         if floor:
             inverse = np.divide(1.0, both, out=both)        # 1 / (w_i + w_F), one division for both shares
             self.to_target = self.w * inverse
-            self.to_f = self.w_f * inverse
         else:
             # Weights of 1e-300 and below (masses whose products underflow): the shares, at most
             # 1, are formed directly, where 1 / (w_i + w_F) would overflow.
             self.to_target = self.w / both
-            self.to_f = self.w_f / both
         if not state.no_v:
             # θ_S ∪ F against θ_l: θ_l gets p_l w_l/(w_F + w_l), θ_S ∪ F keeps Σ_l p_l w_F/(w_F + w_l).
             self.to_l = p * self.to_target
@@ -1067,12 +1066,15 @@ class _Fold:
                 self.to_union[hyp, rows] = u / total
         self.flagged = np.zeros(s.shape[1], dtype=bool)
         self.pair_rows = np.zeros(0, dtype=np.int64)
+        self.w_floor = False                                    # every w_i above the reciprocal floor
         if not fresh:
             self.half = 0.5 * (self.w_f > 0)
             self.flagged = (state.q > 0) & (p_f > 0) & ~(self.w_f > 0)
             if not state.no_v and not complete:
                 self.flagged |= (state.v > 0) & (lost & (p > 0)).any(axis=0)
-            if self.w.all():
+            least = self.w.min() if self.w.size else 1.0
+            self.w_floor = bool(least > _RECIPROCAL_FLOOR)
+            if least > 0:
                 self.zero_w = None                              # m0 weighs every target
                 self.some_zero_w = np.zeros(s.shape[1], dtype=bool)
             else:
@@ -1080,6 +1082,13 @@ class _Fold:
                 self.zero_w &= ~(self.w > 0)
                 self.some_zero_w = self.zero_w.any(axis=0)
                 self.pair_rows = np.flatnonzero(self.some_zero_w & (self.u_total > 0))
+
+    @cached_property
+    def to_f(self) -> np.ndarray:
+        """w_F / (w_i + w_F): F's part of the pairs θ_i, F (formed only where a fold needs it whole)."""
+        if self._inverse:
+            return self.w_f * self._both
+        return self.w_f / self._both
 
     @property
     def except_p(self) -> np.ndarray:
@@ -1118,7 +1127,11 @@ class _Fold:
 
     def _f_share(self) -> np.ndarray:
         """Σ_i k_iF w_F / (w_i + w_F): F's part of the conflicts θ_i / F (with SPEC A.4's fallback)."""
-        out = _dot(self.k_f, self.to_f)
+        if self._inverse and "to_f" not in self.__dict__:
+            out = _dot(self.k_f, self._both)                # Σ_i k_iF / (w_i + w_F), then times w_F
+            out *= self.w_f
+        else:
+            out = _dot(self.k_f, self.to_f)
         if self.fallback is not None:
             np.add.at(out, *self.fallback)
         return out
@@ -1253,7 +1266,7 @@ class _Fold:
         # w_J (s_J Σ_l p_l h_l + p_J Σ_l s_l h_l) with h_l = 1 / (w_J + w_l), l ≠ J; by support
         # where m0 gives neither any weight.
         both = w_j + self.w
-        if _above(both, _RECIPROCAL_FLOOR):
+        if self.w_floor or _above(both, _RECIPROCAL_FLOOR):    # w_J + w_l ≥ w_l
             h = np.divide(1.0, both, out=both)
             h.reshape(-1)[flat] = 0.0
             to_single = w_j * (s_j * _dot(p, h) + p_j * _dot(s, h))
