@@ -18,6 +18,7 @@ import traceback
 import warnings
 from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 from typing import Any, Callable, Optional
 
@@ -154,6 +155,11 @@ def check_lattice(text: str) -> None:
 
 
 # -- strategies ---------------------------------------------------------------------------------------------
+# Building a strategy costs more than drawing from it, so the ones that depend on drawn names are built once for
+# each tuple of names (and the other arguments) and reused.
+_memo = lru_cache(maxsize=None)
+
+
 def _plain_name(name: str) -> bool:
     return not NOT_FINITE.fullmatch(name)
 
@@ -168,12 +174,18 @@ ODD_NAMES = st.one_of(
 NAMES = st.one_of(SIMPLE_NAMES, SIMPLE_NAMES, ODD_NAMES)
 
 
+@_memo
 def frames(names=SIMPLE_NAMES, min_size: int = 1, max_size: int = 4, unique: bool = True):
     return st.lists(names, min_size=min_size, max_size=max_size, unique=unique)
 
 
 def propositions(names: list[str], max_leaves: int = 6, clean: bool = False):
     """Proposition strings over ``names``: unions and intersections with parentheses, and (unless clean) noise."""
+    return _propositions(tuple(names), max_leaves, clean)
+
+
+@_memo
+def _propositions(names: tuple, max_leaves: int, clean: bool):
     if clean and names:
         atoms = st.sampled_from(list(names))
     else:
@@ -194,12 +206,18 @@ def propositions(names: list[str], max_leaves: int = 6, clean: bool = False):
 
 
 def model_objects(names: list[str]):
+    return _model_objects(tuple(names))
+
+
+@_memo
+def _model_objects(names: tuple):
     empties = st.lists(propositions(names, max_leaves=3), max_size=2)
     typed = st.fixed_dictionaries({"type": st.sampled_from(["free", "shafer", "hybrid", "tracking"])},
                                   optional={"empty": empties})
     return st.one_of(st.none(), typed, typed, typed, json_values(max_leaves=4))
 
 
+@_memo
 def json_values(max_leaves: int = 10):
     scalars = st.one_of(st.none(), st.booleans(), st.integers(), st.floats(allow_nan=True, allow_infinity=True),
                         st.text(max_size=6), st.sampled_from([10 ** 400, -1, 0, 1, 0.5, 1e-320, 1e308]))
@@ -208,33 +226,56 @@ def json_values(max_leaves: int = 10):
                         max_leaves=max_leaves)
 
 
+@_memo
 def mass_values():
     return st.one_of(st.floats(min_value=0, max_value=1), st.floats(allow_nan=True, allow_infinity=True),
                      st.integers(min_value=-2, max_value=2), st.sampled_from([5e-324, 1e-300, 1 + 9e-10, 10 ** 30]),
                      st.text(max_size=3), st.none(), st.booleans())
 
 
+@_memo
+def _proposition_lists(names: tuple, clean: bool):
+    return st.lists(propositions(names, clean=clean), min_size=1, max_size=4)
+
+
+@_memo
+def _broken_masses(props: tuple):
+    return st.dictionaries(st.one_of(st.sampled_from(props), st.text(max_size=3)), mass_values(), max_size=4)
+
+
+@_memo
+def _weights(size: int):
+    return st.lists(st.floats(min_value=0.0, max_value=1.0), min_size=size, max_size=size)
+
+
+@_memo
+def _well_formed_models(names: tuple):
+    # the model dictionaries are drawn anew each time: a drawn value must not be shared between examples
+    return st.one_of(st.none(), st.sampled_from(["shafer", "free"]).map(lambda kind: {"type": kind}),
+                     st.sampled_from(["shafer", "free"]).map(lambda kind: {"type": kind}),
+                     st.fixed_dictionaries({"type": st.sampled_from(["hybrid", "shafer", "free"]),
+                                            "empty": st.lists(propositions(names, 3), max_size=2)}))
+
+
+@_memo
 @st.composite
 def bba_documents(draw, valid_bias: bool = True) -> dict:
     """A BBA object: mostly well formed (masses normalised), sometimes broken in one or several ways."""
     broken = draw(st.integers(0, 3)) == 0 if valid_bias else True
     names = draw(frames(NAMES if broken else SIMPLE_NAMES, min_size=0 if broken else 1, unique=not broken))
-    props = draw(st.lists(propositions(names, clean=not broken), min_size=1, max_size=4))
+    props = draw(_proposition_lists(tuple(names), not broken))
     if broken:
-        mass = draw(st.dictionaries(st.one_of(st.sampled_from(props), st.text(max_size=3)), mass_values(), max_size=4))
+        mass = draw(_broken_masses(tuple(props)))
         model = draw(model_objects(names))
     else:
-        weights = draw(st.lists(st.floats(min_value=0.0, max_value=1.0), min_size=len(props), max_size=len(props)))
+        weights = draw(_weights(len(props)))
         total = math.fsum(weights)
         if total == 0:
             weights, total = [1.0] * len(props), float(len(props))
         mass = {}
         for p, w in zip(props, weights):
             mass[p] = mass.get(p, 0.0) + w / total
-        model = draw(st.one_of(st.none(), st.sampled_from([{"type": "shafer"}, {"type": "free"}]),
-                               st.sampled_from([{"type": "shafer"}, {"type": "free"}]),
-                               st.fixed_dictionaries({"type": st.sampled_from(["hybrid", "shafer", "free"]),
-                                                      "empty": st.lists(propositions(names, 3), max_size=2)})))
+        model = draw(_well_formed_models(tuple(names)))
     data: dict = {"frame": names, "mass": mass}
     if model is not None:
         data["model"] = model
