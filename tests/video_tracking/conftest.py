@@ -3,9 +3,27 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 from pathlib import Path
 
 import pytest
+
+
+@functools.lru_cache(maxsize=None)
+def _render_once(config):
+    from belief_tracking import scenes
+
+    return scenes.render(config)
+
+
+@pytest.fixture(scope="session")
+def rendered_scene():
+    """``scenes.render`` drawing each configuration once in a test process, for the tests that use a scene.
+
+    A scene's arrays refuse writes, so the tests can share one; the tests of the renderer itself
+    (tests/video_tracking/test_scenes.py) still compare it with a fresh rendering.
+    """
+    return _render_once
 
 
 @pytest.fixture(scope="module")

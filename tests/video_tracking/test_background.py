@@ -10,7 +10,7 @@ import pytest
 from belief_tracking import background
 from belief_tracking.background import BackgroundConfig, BackgroundModel
 from belief_tracking.errors import TrackingError
-from belief_tracking.scenes import crossing, render
+from belief_tracking.scenes import crossing
 
 #: Pixel-exact checks need the mixtures at full size (the default shrinks frames twice).
 FULL = BackgroundConfig(downscale=1)
@@ -33,8 +33,8 @@ def square_mask(shape, x, y, side):
 
 
 # -- warm-up ---------------------------------------------------------------------------------------
-def test_people_in_view_in_every_warm_up_frame_are_foreground_in_the_first_frame():
-    scene = render(crossing(0))
+def test_people_in_view_in_every_warm_up_frame_are_foreground_in_the_first_frame(rendered_scene):
+    scene = rendered_scene(crossing(0))
     spread = scene.frames[np.linspace(0, len(scene.frames) - 1, 50).round().astype(int)]
     first = scene.ground_truth[scene.ground_truth[:, 0] == 1]
     fractions = {}

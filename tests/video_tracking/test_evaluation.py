@@ -339,10 +339,10 @@ def test_read_mot_accepts_an_empty_tracks_file_when_asked(mot_file):
         read_mot(mot_file("1,1,oops,2,3,4\n"), allow_empty=True)
 
 
-def test_a_mot17_ground_truth_from_write_gt_reads_back_and_scores(tmp_path):
+def test_a_mot17_ground_truth_from_write_gt_reads_back_and_scores(tmp_path, rendered_scene):
     from belief_tracking import scenes
 
-    scene = scenes.render(scenes.crossing(0))
+    scene = rendered_scene(scenes.crossing(0))
     # frames 40 to 60: walker 1 goes behind walker 2, so the visibilities run from 1 down to 0
     rows_40_60 = (scene.ground_truth[:, 0] >= 40) & (scene.ground_truth[:, 0] <= 60)
     gt, seen = scene.ground_truth[rows_40_60], scene.visibility[rows_40_60]

@@ -25,6 +25,9 @@ from belief_tracking.grid import run_experiment
 from belief_tracking.runs import _centre_errors, run_cell
 from belief_tracking.tables import RESULT_COLUMNS, RMS_COLUMNS, TIMING_COLUMNS, rms_per_frame
 
+# The module's tests share its module-scoped fixtures: xdist runs them in one process (--dist loadgroup).
+pytestmark = pytest.mark.xdist_group("test_experiment")
+
 #: 2 rules x 2 seeds x 1 synthetic scene, kept short.
 SMALL = {
     "name": "small",
@@ -306,10 +309,10 @@ def test_bad_configurations_name_the_problem(mapping, message, tmp_path):
     assert message in str(info.value)
 
 
-def test_a_recorded_video_is_resolved_against_the_data_folder(tmp_path):
+def test_a_recorded_video_is_resolved_against_the_data_folder(tmp_path, rendered_scene):
     from belief_tracking import scenes
 
-    scene = scenes.render(scenes.crossing())
+    scene = rendered_scene(scenes.crossing())
     data = tmp_path / "data"
     data.mkdir()
     scenes.write_video(data / "crossing.avi", scene.frames[:20])
@@ -334,11 +337,11 @@ def write_gt_as_detections(path: Path, gt: np.ndarray) -> Path:
 
 
 @pytest.fixture(scope="module")
-def recorded_with_detections(tmp_path_factory):
+def recorded_with_detections(tmp_path_factory, rendered_scene):
     """A 20-frame crossing written as a video, its ground truth and detections made from it."""
     from belief_tracking import scenes
 
-    scene = scenes.render(scenes.crossing())
+    scene = rendered_scene(scenes.crossing())
     data = tmp_path_factory.mktemp("detections")
     gt = scene.ground_truth[scene.ground_truth[:, 0] <= 20]
     scenes.write_video(data / "crossing.avi", scene.frames[:20])

@@ -191,8 +191,8 @@ def test_the_detections_cue_refuses_inconsistent_assignments():
         observation([[40, 30, -20, 40, 0.6]], [0, -1])
 
 
-def test_a_tracker_refuses_bad_detections_naming_the_frame():
-    scene = scenes.render(scenes.crossing(0))
+def test_a_tracker_refuses_bad_detections_naming_the_frame(rendered_scene):
+    scene = rendered_scene(scenes.crossing(0))
     tracker = Tracker(TrackerConfig(particles=10, initiation=InitiationConfig()), None, np.random.default_rng(0))
     tracker.step(1, scene.frames[0], np.zeros((0, 5)))
     for bad in ([[1, 2, 3, 4]], [[1, 2, -3, 4, 0.5]], [[1, 2, 3, 4, 1.5]], [[np.nan, 2, 3, 4, 0.5]]):
@@ -201,8 +201,8 @@ def test_a_tracker_refuses_bad_detections_naming_the_frame():
 
 
 # -- end to end -------------------------------------------------------------------------------------
-def test_a_person_lost_behind_a_wall_takes_back_their_id_when_they_come_out():
-    scene = scenes.render(scenes.lost_and_found(0))
+def test_a_person_lost_behind_a_wall_takes_back_their_id_when_they_come_out(rendered_scene):
+    scene = rendered_scene(scenes.lost_and_found(0))
     config = TrackerConfig.from_settings({"initiation": {}, "warm_up": 50, "particles": 50})
     tracker = Tracker(config, None, np.random.default_rng(0))
     picks = np.linspace(0, len(scene) - 1, 50).round().astype(int)

@@ -30,13 +30,16 @@ from belief_tracking.scenes import (
     write_video,
 )
 
+# The module's tests share its module-scoped fixtures: xdist runs them in one process (--dist loadgroup).
+pytestmark = pytest.mark.xdist_group("test_scenes")
+
 BLACK = (0, 0, 0)
 
 
 @pytest.fixture(scope="module")
-def rendered():
+def rendered(rendered_scene):
     """Every preset rendered once with seed 0 (rendering is the slow part of these tests)."""
-    return {name: render(make(0)) for name, make in PRESETS.items()}
+    return {name: rendered_scene(make(0)) for name, make in PRESETS.items()}
 
 
 def quiet(config: SceneConfig, colour=BLACK) -> SceneConfig:
@@ -71,9 +74,9 @@ def test_the_same_seed_gives_byte_identical_frames_and_ground_truth(rendered):
     assert np.array_equal(again.visibility, first.visibility)
 
 
-def test_another_seed_changes_background_and_noise_but_not_the_layout(rendered):
+def test_another_seed_changes_background_and_noise_but_not_the_layout(rendered, rendered_scene):
     first = rendered["crossing"]
-    other = render(crossing(1))
+    other = rendered_scene(crossing(1))
     assert not np.array_equal(other.frames[0], first.frames[0])
     # averaged over 100 frames the sensor noise nearly cancels: what is left is the background
     assert np.abs(other.frames.mean(axis=0) - first.frames.mean(axis=0)).mean() > 2
@@ -236,8 +239,9 @@ def test_scene_accessors_agree_with_the_ground_truth_table(rendered):
 
 @pytest.mark.parametrize("name, meet_frame", [("crossing", 50), ("similar_colours", 50), ("demo", 45)])
 @pytest.mark.parametrize("seed", [0, 1])
-def test_the_crossing_hides_walker_one_completely_and_only_near_the_meeting(rendered, name, meet_frame, seed):
-    scene = rendered[name] if seed == 0 else render(PRESETS[name](seed))
+def test_the_crossing_hides_walker_one_completely_and_only_near_the_meeting(rendered, rendered_scene, name, meet_frame,
+                                                                          seed):
+    scene = rendered[name] if seed == 0 else rendered_scene(PRESETS[name](seed))
     frames, _, visibility = track_of(scene, 1)
     assert visibility[frames == meet_frame][0] == 0.0
     hidden = frames[visibility == 0.0]

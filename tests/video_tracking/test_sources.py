@@ -17,12 +17,15 @@ from belief_tracking.initiation import init_from_gt
 from belief_tracking.sources import FrameSource, open_source
 from belief_tracking.tracker import Tracker
 
+# The module's tests share its module-scoped fixtures: xdist runs them in one process (--dist loadgroup).
+pytestmark = pytest.mark.xdist_group("test_sources")
+
 N_FRAMES = 15
 
 
 @pytest.fixture(scope="module")
-def short_scene():
-    scene = scenes.render(scenes.crossing(0))
+def short_scene(rendered_scene):
+    scene = rendered_scene(scenes.crossing(0))
     gt = scene.ground_truth[scene.ground_truth[:, 0] <= N_FRAMES]
     return scene.frames[:N_FRAMES], gt
 

@@ -134,8 +134,8 @@ def test_readme_main_command_runs_the_tracking_demo_and_writes_every_output(tmp_
     assert len(diagnostics) > 100 and np.isfinite(diagnostics["mean_bel"]).all()
 
 
-def test_a_video_without_init_file_is_tracked_automatically(tmp_path, capsys):
-    scene = scenes.render(scenes.entering_leaving(0))
+def test_a_video_without_init_file_is_tracked_automatically(tmp_path, capsys, rendered_scene):
+    scene = rendered_scene(scenes.entering_leaving(0))
     video = tmp_path / "entering.avi"
     scenes.write_video(video, scene)
     gt = tmp_path / "gt.txt"
@@ -150,8 +150,8 @@ def test_a_video_without_init_file_is_tracked_automatically(tmp_path, capsys):
     assert "MOTA" in capsys.readouterr().out
 
 
-def test_fusion_strategy_edges_and_adaptive_particles_from_the_command_line(tmp_path):
-    scene = scenes.render(scenes.crossing(0))
+def test_fusion_strategy_edges_and_adaptive_particles_from_the_command_line(tmp_path, rendered_scene):
+    scene = rendered_scene(scenes.crossing(0))
     video = tmp_path / "crossing.avi"
     scenes.write_video(video, scene.frames[:20])
     gt = tmp_path / "gt.txt"

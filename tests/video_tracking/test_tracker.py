@@ -16,6 +16,9 @@ from belief_tracking.particles import DegenerateWeightsWarning
 from belief_tracking.runner import run
 from belief_tracking.tracker import Tracker
 
+# The module's tests share its module-scoped fixtures: xdist runs them in one process (--dist loadgroup).
+pytestmark = pytest.mark.xdist_group("test_tracker")
+
 
 def track(scene, config, seed, plan=None):
     """MOT rows, all estimates and every diagnostics row of a scene tracked from its ground truth (or ``plan``)."""
@@ -30,9 +33,9 @@ def track(scene, config, seed, plan=None):
 
 
 @pytest.fixture(scope="module")
-def crossing_scene():
+def crossing_scene(rendered_scene):
     # Frames 20..75 of the crossing: walker 1 is fully hidden behind walker 2 around frame 50.
-    full = scenes.render(scenes.crossing(0))
+    full = rendered_scene(scenes.crossing(0))
     frames = full.frames[20:76]
     gt = full.ground_truth[(full.ground_truth[:, 0] > 20) & (full.ground_truth[:, 0] <= 76)].copy()
     gt[:, 0] -= 20
@@ -83,7 +86,8 @@ def test_target_leaving_the_frame_stays_finite():
 
 def test_same_seed_same_tracks_different_seed_different(crossing_scene):
     short = scenes.Scene(crossing_scene.config, crossing_scene.frames[:12],
-                         crossing_scene.ground_truth[crossing_scene.ground_truth[:, 0] <= 12], crossing_scene.visibility)
+                         crossing_scene.ground_truth[crossing_scene.ground_truth[:, 0] <= 12],
+                         crossing_scene.visibility)
     config = TrackerConfig(particles=30)
     first, _, _ = track(short, config, seed=5)
     again, _, _ = track(short, config, seed=5)

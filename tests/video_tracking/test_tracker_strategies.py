@@ -15,6 +15,9 @@ from belief_tracking.initiation import InitiationConfig, init_from_gt
 from belief_tracking.tracker import Tracker, diagnostic_columns
 from belief_tracking.weighting import WEIGHTINGS
 
+# The module's tests share its module-scoped fixtures: xdist runs them in one process (--dist loadgroup).
+pytestmark = pytest.mark.xdist_group("test_tracker_strategies")
+
 FUSIONS = tuple(WEIGHTINGS)
 
 
@@ -36,8 +39,8 @@ def diagnostics_by_frame(per_frame):
 
 # -- automatic initiation -------------------------------------------------------------------------
 @pytest.fixture(scope="module")
-def entering():
-    scene = scenes.render(scenes.entering_leaving(0))
+def entering(rendered_scene):
+    scene = rendered_scene(scenes.entering_leaving(0))
     _, per_frame = run_scene(scene, TrackerConfig(particles=40, initiation=InitiationConfig()))
     return scene, per_frame
 
@@ -88,8 +91,8 @@ OCCLUSION = AdaptiveConfig(threshold=0.9)
 
 
 @pytest.mark.parametrize("fusion, update", [("adaptive", False), ("belief", True)])
-def test_an_occluded_target_keeps_its_template(fusion, update):
-    scene = scenes.render(scenes.similar_colours(0))
+def test_an_occluded_target_keeps_its_template(fusion, update, rendered_scene):
+    scene = rendered_scene(scenes.similar_colours(0))
     config = TrackerConfig(particles=60, cues=("colour", "location"), fusion=fusion, template_update=update,
                            adaptive_fusion=OCCLUSION)
     assert config.updates_templates
@@ -115,8 +118,8 @@ def test_an_occluded_target_keeps_its_template(fusion, update):
     assert changed > 0                                            # the templates do follow visible targets
 
 
-def test_fixed_templates_by_default_for_the_belief_rules():
-    scene = scenes.render(scenes.crossing(0))
+def test_fixed_templates_by_default_for_the_belief_rules(rendered_scene):
+    scene = rendered_scene(scenes.crossing(0))
     config = TrackerConfig(particles=20, cues=("colour", "location"))
     assert not config.updates_templates and TrackerConfig(fusion="adaptive").updates_templates
     assert TrackerConfig(fusion="adaptive", template_update=False).updates_templates     # C's method includes it
@@ -127,8 +130,8 @@ def test_fixed_templates_by_default_for_the_belief_rules():
 
 
 # -- adaptive particle count ----------------------------------------------------------------------
-def test_the_particle_count_rises_during_the_occlusion_and_falls_after():
-    scene = scenes.render(scenes.crossing(0))
+def test_the_particle_count_rises_during_the_occlusion_and_falls_after(rendered_scene):
+    scene = rendered_scene(scenes.crossing(0))
     config = TrackerConfig(particles=80, cues=("colour", "location"), adaptive_particles=True)
     _, per_frame = run_scene(scene, config, plan=init_from_gt(scene.ground_truth))
     counts = {frame: row["particles"] for (frame, target), row in diagnostics_by_frame(per_frame).items()
@@ -140,8 +143,8 @@ def test_the_particle_count_rises_during_the_occlusion_and_falls_after():
     assert during >= before + 3 and during >= after + 3, (before, during, after)
 
 
-def test_a_fixed_count_keeps_n():
-    scene = scenes.render(scenes.crossing(0))
+def test_a_fixed_count_keeps_n(rendered_scene):
+    scene = rendered_scene(scenes.crossing(0))
     short = scenes.Scene(scene.config, scene.frames[:5], scene.ground_truth, scene.visibility)
     _, per_frame = run_scene(short, TrackerConfig(particles=30), plan=init_from_gt(scene.ground_truth))
     assert {row["particles"] for row in diagnostics_by_frame(per_frame).values()} == {30.0}
@@ -149,8 +152,8 @@ def test_a_fixed_count_keeps_n():
 
 # -- strategies and diagnostics ----------------------------------------------------------------------
 @pytest.mark.parametrize("fusion", FUSIONS)
-def test_every_fusion_strategy_tracks_and_reports_the_same_diagnostics_on_request(fusion):
-    scene = scenes.render(scenes.crossing(0))
+def test_every_fusion_strategy_tracks_and_reports_the_same_diagnostics_on_request(fusion, rendered_scene):
+    scene = rendered_scene(scenes.crossing(0))
     short = scenes.Scene(scene.config, scene.frames[:12], scene.ground_truth, scene.visibility)
     cues = ("colour", "location", "edges")
     config = TrackerConfig(particles=30, cues=cues, fusion=fusion, diagnostics="all")
@@ -174,7 +177,7 @@ def test_every_fusion_strategy_tracks_and_reports_the_same_diagnostics_on_reques
     ("sum", ("particles", "ess")),
     ("product", ("particles", "ess")),
 ])
-def test_only_the_active_strategy_runs_by_default(fusion, columns, monkeypatch):
+def test_only_the_active_strategy_runs_by_default(fusion, columns, monkeypatch, rendered_scene):
     # The belief fusion and C's confidences run only for the strategy that uses them.
     from belief_tracking import adaptive, weighting
 
@@ -184,7 +187,7 @@ def test_only_the_active_strategy_runs_by_default(fusion, columns, monkeypatch):
                         or real(self, evidence))
     monkeypatch.setattr(adaptive, "feature_spreads",
                         lambda *a, real=adaptive.feature_spreads, **k: calls.append("spreads") or real(*a, **k))
-    scene = scenes.render(scenes.crossing(0))
+    scene = rendered_scene(scenes.crossing(0))
     short = scenes.Scene(scene.config, scene.frames[:4], scene.ground_truth, scene.visibility)
     config = TrackerConfig(particles=20, cues=("colour", "location"), fusion=fusion)
     _, per_frame = run_scene(short, config, plan=init_from_gt(scene.ground_truth))
@@ -192,8 +195,8 @@ def test_only_the_active_strategy_runs_by_default(fusion, columns, monkeypatch):
     assert set(calls) == {"belief": {"belief"}, "adaptive": {"spreads"}}.get(fusion, set())
 
 
-def test_strategies_weigh_particles_differently():
-    scene = scenes.render(scenes.crossing(0))
+def test_strategies_weigh_particles_differently(rendered_scene):
+    scene = rendered_scene(scenes.crossing(0))
     short = scenes.Scene(scene.config, scene.frames[:4], scene.ground_truth, scene.visibility)
     states = {}
     for fusion in FUSIONS:
@@ -220,8 +223,8 @@ def test_bad_settings_name_the_field(kwargs, message):
         TrackerConfig(**kwargs)
 
 
-def test_warm_up_learns_the_background_before_the_first_frame():
-    scene = scenes.render(scenes.crossing(0))
+def test_warm_up_learns_the_background_before_the_first_frame(rendered_scene):
+    scene = rendered_scene(scenes.crossing(0))
     tracker = Tracker(TrackerConfig(particles=10, initiation=InitiationConfig()), None, np.random.default_rng(0))
     assert tracker.warm_up(scene.frames[::2]) == 50
     estimates = tracker.step(1, scene.frame(0)).estimates
