@@ -166,3 +166,17 @@ def test_good_edge_settings_are_accepted():
     assert InitiationConfig(min_area=np.float32(0.01), border=np.int64(4)).border == 4
 
 
+
+
+def test_foreground_fraction_of_a_few_small_boxes_counts_the_same_pixels_as_many():
+    rng = np.random.default_rng(5)
+    mask = rng.random((120, 160)) < 0.3
+    boxes = np.column_stack([rng.uniform(-10, 165, 60), rng.uniform(-10, 125, 60),
+                             rng.uniform(0.5, 12, 60), rng.uniform(0.5, 12, 60)])
+    small = np.concatenate([foreground_fraction(mask, boxes[i:i + 3]) for i in range(0, 60, 3)])  # by the boxes
+    whole = foreground_fraction(mask, np.vstack([boxes, [[0, 0, 160, 120]]]))[:-1]             # integral image
+    assert small.tolist() == whole.tolist()
+    rows, cols = np.mgrid[0:120, 0:160]
+    x, y, w, h = boxes[7]
+    inside = (cols + 0.5 >= x) & (cols + 0.5 < x + w) & (rows + 0.5 >= y) & (rows + 0.5 < y + h)
+    assert small[7] == (mask[inside].mean() if inside.any() else 0.0)
