@@ -219,6 +219,8 @@ class Tracker:
         # as they are whether or not the confidences are computed.
         feature_rng = rng.spawn(1)[0]
         self.cues = [CUES[name](config.cue_config(name)) for name in config.cues]
+        # Found once: isinstance against a runtime-checkable protocol inspects the class each call.
+        self._appearance_cues = [cue for cue in self.cues if isinstance(cue, AppearanceCue)]
         self.background = BackgroundModel(config.background) if config.uses_background else None
         self.weighting = make_weighting(config.fusion, config, feature_rng)
         self._belief = make_weighting("belief", config, feature_rng) \
@@ -339,7 +341,7 @@ class Tracker:
         The smallest Bhattacharyya coefficient ρ (L (12)) over the appearance cues; None
         without an appearance cue.
         """
-        cues = [cue for cue in self.cues if isinstance(cue, AppearanceCue)]
+        cues = self._appearance_cues
         if not cues:
             return None
         states = np.array([t.estimate for t in self.targets])
