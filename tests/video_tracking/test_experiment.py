@@ -25,9 +25,6 @@ from belief_tracking.grid import run_experiment
 from belief_tracking.runs import _centre_errors, run_cell
 from belief_tracking.tables import RESULT_COLUMNS, RMS_COLUMNS, TIMING_COLUMNS, rms_per_frame
 
-# The module's tests share its module-scoped fixtures: xdist runs them in one process (--dist loadgroup).
-pytestmark = pytest.mark.xdist_group("test_experiment")
-
 #: 2 rules x 2 seeds x 1 synthetic scene, kept short.
 SMALL = {
     "name": "small",

@@ -30,9 +30,6 @@ from belief_tracking.scenes import (
     write_video,
 )
 
-# The module's tests share its module-scoped fixtures: xdist runs them in one process (--dist loadgroup).
-pytestmark = pytest.mark.xdist_group("test_scenes")
-
 BLACK = (0, 0, 0)
 
 

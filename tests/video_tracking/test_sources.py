@@ -17,9 +17,6 @@ from belief_tracking.initiation import init_from_gt
 from belief_tracking.sources import FrameSource, open_source
 from belief_tracking.tracker import Tracker
 
-# The module's tests share its module-scoped fixtures: xdist runs them in one process (--dist loadgroup).
-pytestmark = pytest.mark.xdist_group("test_sources")
-
 N_FRAMES = 15
 
 

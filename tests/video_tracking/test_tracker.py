@@ -16,9 +16,6 @@ from belief_tracking.particles import DegenerateWeightsWarning
 from belief_tracking.runner import run
 from belief_tracking.tracker import Tracker
 
-# The module's tests share its module-scoped fixtures: xdist runs them in one process (--dist loadgroup).
-pytestmark = pytest.mark.xdist_group("test_tracker")
-
 
 def track(scene, config, seed, plan=None):
     """MOT rows, all estimates and every diagnostics row of a scene tracked from its ground truth (or ``plan``)."""

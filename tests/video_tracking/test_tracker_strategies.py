@@ -15,9 +15,6 @@ from belief_tracking.initiation import InitiationConfig, init_from_gt
 from belief_tracking.tracker import Tracker, diagnostic_columns
 from belief_tracking.weighting import WEIGHTINGS
 
-# The module's tests share its module-scoped fixtures: xdist runs them in one process (--dist loadgroup).
-pytestmark = pytest.mark.xdist_group("test_tracker_strategies")
-
 FUSIONS = tuple(WEIGHTINGS)
 
 
