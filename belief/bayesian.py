@@ -1381,6 +1381,28 @@ def _pair_shares(s: np.ndarray, p: np.ndarray, w: np.ndarray, sigma: Callable[[]
     return out
 
 
+def _pair_sums(weights: np.ndarray, s: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Σ_{l≠i} k_il / (x_i + x_l) for every i, k_il = s_i p_l + s_l p_i, for weights x above :data:`_RECIPROCAL_FLOOR`.
+
+    The direct branch of :func:`_share_products` without its last product by x_i, which the
+    caller folds into its own; a row with a weight at the floor or below gets no meaningful
+    value and must be computed again.
+    """
+    o, n = s.shape
+    out = np.zeros((o, n))
+    pair, share, term = np.empty((o - 1, n)), np.empty((o - 1, n)), np.empty((o - 1, n))
+    for d in range(1, o):
+        m = o - d
+        d_il, k_il, t = pair[:m], share[:m], term[:m]
+        np.add(weights[:m], weights[d:], out=d_il)
+        np.multiply(s[:m], p[d:], out=k_il)
+        k_il += np.multiply(s[d:], p[:m], out=t)
+        k_il /= d_il
+        out[:m] += k_il
+        out[d:] += k_il
+    return out
+
+
 def _share_products(weights: np.ndarray, s: np.ndarray, p: np.ndarray, members: np.ndarray | None) -> np.ndarray:
     """Σ_{l≠i} k_il x_i / (x_i + x_l) for every i, k_il = s_i p_l + s_l p_i, over members i ≠ l (0 if x_i + x_l = 0).
 
@@ -1580,6 +1602,8 @@ class RRuleFusion(_Fusion):
     def __init__(self, values, split: ExclusiveSplit, r_mode: str, union: bool, maps=None) -> None:
         self.split = split
         self.sources = _Blocks(values, split.size, len(split.free) if len(values) > 2 else 0, maps)
+        self._maps = maps
+        self._three = len(values) == 3 and r_mode == "paper"     # :meth:`_run_three` applies
         self.rows = self.sources.rows
         self.s = len(values)
         self.r_mode = r_mode
@@ -1632,6 +1656,9 @@ class RRuleFusion(_Fusion):
 
     def _run(self, positions: np.ndarray | None = None, full: bool = False) -> None:
         """One pass over the row blocks for the totals, and the selected or every free hypothesis."""
+        if not full and self._three:
+            self._run_three(positions)
+            return
         n, o = self.rows, len(self.split.free)
         totals = None if self._totals is not None else {k: np.empty(n) for k in ("s", "f", "u", "q", "v", "e")}
         selected = None if positions is None else {k: np.empty(n) for k in ("s", "u", "qj", "vj")}
@@ -1654,6 +1681,182 @@ class RRuleFusion(_Fusion):
             self._selected = (positions.tobytes(), selected)
         if every is not None:
             self._full = every
+
+    def _run_three(self, positions: np.ndarray | None) -> None:
+        """:meth:`_run` for three cues and the R of W (10) as printed, where every weight w_i is above the floor.
+
+        The two folds of :class:`_Fold` in the case that every row of a tracker meets: m0
+        weighs every target of both folds (w_i > :data:`_RECIPROCAL_FLOOR`), so neither
+        SPEC A.4 fallback nor a flagged class arises in the first fold, and the second one
+        has no θ_S ∪ F to start from.  Blocks of rows give only the sums over the targets
+        that the second fold needs; its per-row formulas (R of W (10), the totals and the
+        selected target) then run once on whole columns.  Rows below the floor, and rows
+        whose R may be exactly 1 (disjoint focal sets), are folded again by the general
+        fold on their own, so that every row gets the arithmetic of :class:`_Fold`.
+        """
+        n, union = self.rows, self.union
+        sums = {k: np.empty(n) for k in ("r1", "s0", "t1", "w1", "f1", "k1", "a2", "s1", "w2", "k2", "f2", "g2", "t2",
+                                         "f", "pf", "cf")}
+        if positions is not None:
+            sums.update({k: np.empty(n) for k in ("sj", "pj", "cj", "s1j", "w2j", "ch", "sh")})
+        slow = np.zeros(n, dtype=bool)
+        with np.errstate(all="ignore"):              # rows below the floor are redone by _Fold
+            for rows in self.sources:
+                self._three_block(rows, None if positions is None else positions[rows], sums, slow)
+            totals, selected, flagged, near = self._three_rows(sums, positions)
+        slow |= near
+        self._flagged |= flagged
+        if slow.any():
+            redo = np.flatnonzero(slow)
+            sub = RRuleFusion([v if v.shape[0] != n else v[redo] for v in self.sources.values], self.split,
+                              self.r_mode, union, self._maps)
+            sub._three = False
+            sub._run(None if positions is None else positions[redo])
+            self._flagged[redo] = sub._flagged
+            for k, v in sub._totals.items():
+                totals[k][redo] = v
+            if selected is not None:
+                for k, v in sub._selected[1].items():
+                    selected[k][redo] = v
+        if self._totals is None:
+            self._totals = totals
+        if selected is not None:
+            self._selected = (positions.tobytes(), selected)
+
+    def _three_block(self, rows: slice, j: np.ndarray | None, sums: dict, slow: np.ndarray) -> None:
+        """The sums over the targets of one block of rows (:meth:`_run_three`), written to ``sums[k][rows]``."""
+        (s, f), (p, p_f), (c, c_f) = self._cues(rows)
+        # First fold (its state is fresh): k_il of every pair to θ_i and θ_l as w_i : w_l, k_iF to
+        # θ_i and F as w_i : w_F, R·k_iF to θ_i ∪ F (or ∅).
+        r1 = _state_inconsistency(_RState.bayesian(s, f), p, p_f, "paper", self.split)      # W (10)
+        rho1 = 1.0 - r1
+        w1 = s * p
+        low = not _above(w1, _RECIPROCAL_FLOOR)
+        w_f = f * p_f
+        inverse = w1 + w_f
+        np.divide(1.0, inverse, out=inverse)                 # 1 / (w_i + w_F)
+        k1 = s * p_f
+        k1 += f * p
+        to_singles = _pair_sums(w1, s, p)                    # Σ_{l≠i} k_il / (w_i + w_l)
+        ki = np.multiply(k1, inverse, out=inverse)
+        to_singles += ki                                     # k_iF / (w_i + w_F)
+        f1 = np.add.reduce(ki, 0)
+        f1 *= w_f
+        f1 *= rho1
+        f1 += w_f                                            # m′(F)
+        to_singles *= w1
+        to_singles *= rho1
+        s1 = np.add(to_singles, w1, out=to_singles)          # m′(θ_i)
+        k_total = np.add.reduce(k1, 0)
+        # Second fold: R needs Σ|m′(θ_i) − c_i|, m0 weighs w_i = (m′(θ_i) + m′(θ_i ∪ F)) c_i.
+        d = s1 - c
+        a2 = np.add.reduce(np.abs(d, out=d), 0)
+        if self.union:
+            k1 *= r1                                         # m′(θ_i ∪ F)
+            w2 = np.add(k1, s1, out=k1)
+            u_total = r1 * k_total
+        else:
+            w2 = s1.copy()
+            u_total = 0.0
+        w2 *= c
+        low = low or not _above(w2, _RECIPROCAL_FLOOR)
+        w2_f = (f1 + u_total) * c_f
+        k2 = s1 * c_f
+        k2 += np.multiply(f1, c, out=d)
+        inverse = np.add(w2, w2_f, out=d)
+        np.divide(1.0, inverse, out=inverse)
+        out = {"r1": r1, "f1": f1, "k1": k_total, "a2": a2, "f": f, "pf": p_f, "cf": c_f,
+               "s0": np.add.reduce(s, 0), "t1": np.add.reduce(p, 0), "w1": np.add.reduce(w1, 0),
+               "s1": np.add.reduce(s1, 0), "w2": np.add.reduce(w2, 0), "t2": np.add.reduce(c, 0),
+               "k2": np.add.reduce(k2, 0),
+               "f2": _dot(k2, inverse),                                       # Σ k_iF / (w_i + w_F)
+               "g2": np.einsum("ij,ij,ij->j", k2, w2, inverse)}              # Σ k_iF w_i / (w_i + w_F)
+        if j is not None:
+            # θ_J against every other θ_l: Σ_l c_l h_l and Σ_l m′(θ_l) h_l, h_l = 1 / (w_J + w_l).
+            b = j.size
+            flat = j * b
+            flat += _row_offsets(b, 1)
+            w2j = w2.reshape(-1).take(flat)
+            h = np.add(w2, w2j, out=inverse)
+            np.divide(1.0, h, out=h)
+            h.reshape(-1)[flat] = 0.0
+            out.update(s1j=s1.reshape(-1).take(flat), w2j=w2j, ch=_dot(c, h), sh=_dot(s1, h),
+                       sj=s.reshape(-1).take(flat), pj=p.reshape(-1).take(flat), cj=c.reshape(-1).take(flat))
+        for k, v in out.items():
+            sums[k][rows] = v
+        if low:
+            slow[rows] |= ~(np.minimum(w1.min(axis=0), w2.min(axis=0)) > _RECIPROCAL_FLOOR)
+
+    def _three_rows(self, sums: dict, positions: np.ndarray | None):
+        """The per-row formulas of the second fold (:meth:`_Fold.totals`, :meth:`_Fold.selected`) on whole columns.
+
+        Returns the totals, the selected parts (or None), the flagged rows and the rows whose R
+        may be 1 exactly.
+        """
+        union = self.union
+        f0, p_f, c_f = sums["f"], sums["pf"], sums["cf"]
+        r1, k1, f1, t2 = sums["r1"], sums["k1"], sums["f1"], sums["t2"]
+        q1 = np.maximum(sums["s0"] * sums["t1"] - sums["w1"], 0.0)
+        q1 *= r1                                             # Σ m′(θ_S), every θ_S a pair
+        u1 = r1 * k1 if union else np.zeros(self.rows)       # Σ m′(θ_i ∪ F)
+        e1 = np.zeros(self.rows) if union else r1 * k1       # m′(∅)
+        # R of W (10) between m′ and the third cue: the cue has mass on singletons only.
+        value = sums["a2"] + np.abs(f1 - c_f)
+        value += q1
+        value += u1
+        value += e1
+        value *= 0.5
+        near = value >= 1.0 - 1e-6
+        np.clip(value, 0.0, 1.0, out=value)
+        r = np.sqrt(value, out=value)
+        rho = 1.0 - r
+        w_f = (f1 + u1) * c_f
+        half = 0.5 * (w_f > 0)
+        flagged = (q1 > 0) & (c_f > 0) & ~(w_f > 0)
+        # Σ_{i≠l} (m′(θ_i) + m′(θ_i ∪ F)) c_l: the consensus of targets and of θ_i ∪ F with other targets.
+        s1, w2 = sums["s1"], sums["w2"]
+        spread = np.maximum((s1 + u1) * t2 - w2, 0.0)
+        q_p_f = q1 * c_f
+        r_k = r * sums["k2"]
+        totals = {"s": w2 + rho * (spread + sums["g2"]),
+                  "f": w_f + rho * (sums["f2"] * w_f + half * q_p_f),
+                  "u": r_k if union else np.zeros(self.rows),
+                  "q": r * spread + q1 * t2,
+                  "v": ((r if union else 0.0) + rho * half) * q_p_f,
+                  "e": e1 * (t2 + c_f) if union else r_k + e1 * (t2 + c_f) + r * q_p_f}
+        if positions is None:
+            return totals, None, flagged, near
+        s_j, p_j, c_j = sums["sj"], sums["pj"], sums["cj"]
+        s1j, w_j = sums["s1j"], sums["w2j"]
+        q1j = sums["s0"] - s_j                              # Σ_{S∋J} m′(θ_S): the pairs θ_J ∩ θ_l
+        q1j *= p_j
+        q1j += s_j * (sums["t1"] - p_j)
+        q1j *= r1
+        if union:
+            u1j = s_j * p_f
+            u1j += f0 * p_j
+            u1j *= r1                                        # m′(θ_J ∪ F)
+        else:
+            u1j = np.zeros(self.rows)
+        k_f = s1j * c_f
+        k_f += f1 * c_j
+        except_p = t2 - c_j
+        except_u = u1 - u1j
+        to_single = s1j * sums["ch"]
+        to_single += c_j * sums["sh"]
+        to_single *= w_j
+        to_single += k_f * (w_j * (1.0 / (w_j + w_f)))
+        to_single += c_j * except_u                         # θ_l ∪ F against θ_J: all to θ_J
+        qj = s1 - s1j
+        qj *= c_j
+        qj += s1j * except_p
+        qj *= r
+        qj += q1j * t2 + np.maximum(q1 - q1j, 0.0) * c_j + r * (u1j * except_p + c_j * except_u)
+        to_single *= rho
+        to_single += w_j
+        selected = {"s": to_single, "u": r * k_f if union else np.zeros(self.rows), "qj": qj,
+                    "vj": ((r if union else 0.0) + rho * half) * c_f * q1j}
+        return totals, selected, flagged, near
 
     @property
     def general_rows(self) -> np.ndarray:

@@ -521,12 +521,13 @@ def test_other_queries_read_the_materialised_batch(counted):
 
 
 def test_one_fold_per_fused_batch(monkeypatch):
-    # A tracker reads Bel, m(θ_J), Pls and m(∅) of one fused batch: the rule is folded once.
+    # A tracker reads Bel, m(θ_J), Pls and m(∅) of one fused batch: the rule is folded once, in
+    # one pass over the sources' rows (30 rows: one block).
     import belief.bayesian as bayesian
 
     made = []
-    real = bayesian._Fold
-    monkeypatch.setattr(bayesian, "_Fold", lambda *a, **k: made.append(1) or real(*a, **k))
+    real = bayesian._Blocks.block
+    monkeypatch.setattr(bayesian._Blocks, "block", lambda self, rows: made.append(1) or real(self, rows))
     model = Model.for_targets(4)
     rng = np.random.default_rng(2)
     cues = [MassBatch.bayesian(dense(rng, 30, 5), model=model) for _ in range(3)]
@@ -535,7 +536,7 @@ def test_one_fold_per_fused_batch(monkeypatch):
     fused = combine(*cues, rule="r_rule")
     fused.bel(targets, select=owner)
     folds = len(made)
-    assert folds == 2                                  # the first fold, and the last one for the owners
+    assert folds == 1
     fused.mass(targets, select=owner.copy()), fused.pls(targets, select=owner), fused.empty_mass
     fused.betp(targets, select=owner)
     assert len(made) == folds
