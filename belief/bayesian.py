@@ -1726,12 +1726,24 @@ class RRuleFusion(_Fusion):
     def _three_block(self, rows: slice, j: np.ndarray | None, sums: dict, slow: np.ndarray) -> None:
         """The sums over the targets of one block of rows (:meth:`_run_three`), written to ``sums[k][rows]``."""
         (s, f), (p, p_f), (c, c_f) = self._cues(rows)
+        put = {k: v[rows] for k, v in sums.items()}
+        reduce = np.add.reduce
+        put["f"][...], put["pf"][...], put["cf"][...] = f, p_f, c_f
+        # R of W (10) between the first two cues, Σ_A |Δ(A)| / 2 over their singletons; a row whose
+        # sum is about 1 may have disjoint focal sets, where R is 1 exactly: the general fold decides.
+        d = s - p
+        r1 = reduce(np.abs(d, out=d), 0, out=put["r1"])
+        r1 += np.abs(f - p_f)
+        r1 *= 0.5
+        near = r1 >= 1.0 - 1e-6
+        np.clip(r1, 0.0, 1.0, out=r1)
+        np.sqrt(r1, out=r1)
+        rho1 = 1.0 - r1
         # First fold (its state is fresh): k_il of every pair to θ_i and θ_l as w_i : w_l, k_iF to
         # θ_i and F as w_i : w_F, R·k_iF to θ_i ∪ F (or ∅).
-        r1 = _state_inconsistency(_RState.bayesian(s, f), p, p_f, "paper", self.split)      # W (10)
-        rho1 = 1.0 - r1
-        w1 = s * p
-        low = not _above(w1, _RECIPROCAL_FLOOR)
+        w1 = np.multiply(s, p, out=d)
+        if not _above(w1, _RECIPROCAL_FLOOR):
+            near |= ~(w1.min(axis=0) > _RECIPROCAL_FLOOR)
         w_f = f * p_f
         inverse = w1 + w_f
         np.divide(1.0, inverse, out=inverse)                 # 1 / (w_i + w_F)
@@ -1740,17 +1752,22 @@ class RRuleFusion(_Fusion):
         to_singles = _pair_sums(w1, s, p)                    # Σ_{l≠i} k_il / (w_i + w_l)
         ki = np.multiply(k1, inverse, out=inverse)
         to_singles += ki                                     # k_iF / (w_i + w_F)
-        f1 = np.add.reduce(ki, 0)
+        f1 = reduce(ki, 0, out=put["f1"])
         f1 *= w_f
         f1 *= rho1
         f1 += w_f                                            # m′(F)
         to_singles *= w1
         to_singles *= rho1
         s1 = np.add(to_singles, w1, out=to_singles)          # m′(θ_i)
-        k_total = np.add.reduce(k1, 0)
+        reduce(s, 0, out=put["s0"])
+        reduce(p, 0, out=put["t1"])
+        reduce(w1, 0, out=put["w1"])
+        reduce(s1, 0, out=put["s1"])
+        reduce(c, 0, out=put["t2"])
+        k_total = reduce(k1, 0, out=put["k1"])
         # Second fold: R needs Σ|m′(θ_i) − c_i|, m0 weighs w_i = (m′(θ_i) + m′(θ_i ∪ F)) c_i.
-        d = s1 - c
-        a2 = np.add.reduce(np.abs(d, out=d), 0)
+        np.subtract(s1, c, out=d)
+        reduce(np.abs(d, out=d), 0, out=put["a2"])
         if self.union:
             k1 *= r1                                         # m′(θ_i ∪ F)
             w2 = np.add(k1, s1, out=k1)
@@ -1759,33 +1776,29 @@ class RRuleFusion(_Fusion):
             w2 = s1.copy()
             u_total = 0.0
         w2 *= c
-        low = low or not _above(w2, _RECIPROCAL_FLOOR)
+        if not _above(w2, _RECIPROCAL_FLOOR):
+            near |= ~(w2.min(axis=0) > _RECIPROCAL_FLOOR)
+        reduce(w2, 0, out=put["w2"])
         w2_f = (f1 + u_total) * c_f
         k2 = s1 * c_f
         k2 += np.multiply(f1, c, out=d)
+        reduce(k2, 0, out=put["k2"])
         inverse = np.add(w2, w2_f, out=d)
         np.divide(1.0, inverse, out=inverse)
-        out = {"r1": r1, "f1": f1, "k1": k_total, "a2": a2, "f": f, "pf": p_f, "cf": c_f,
-               "s0": np.add.reduce(s, 0), "t1": np.add.reduce(p, 0), "w1": np.add.reduce(w1, 0),
-               "s1": np.add.reduce(s1, 0), "w2": np.add.reduce(w2, 0), "t2": np.add.reduce(c, 0),
-               "k2": np.add.reduce(k2, 0),
-               "f2": _dot(k2, inverse),                                       # Σ k_iF / (w_i + w_F)
-               "g2": np.einsum("ij,ij,ij->j", k2, w2, inverse)}              # Σ k_iF w_i / (w_i + w_F)
+        np.einsum("ij,ij->j", k2, inverse, out=put["f2"])                 # Σ k_iF / (w_i + w_F)
+        np.einsum("ij,ij,ij->j", k2, w2, inverse, out=put["g2"])          # Σ k_iF w_i / (w_i + w_F)
         if j is not None:
             # θ_J against every other θ_l: Σ_l c_l h_l and Σ_l m′(θ_l) h_l, h_l = 1 / (w_J + w_l).
-            b = j.size
-            flat = j * b
-            flat += _row_offsets(b, 1)
-            w2j = w2.reshape(-1).take(flat)
-            h = np.add(w2, w2j, out=inverse)
+            flat = j * j.size
+            flat += _row_offsets(j.size, 1)
+            for key, values in (("sj", s), ("pj", p), ("cj", c), ("s1j", s1), ("w2j", w2)):
+                values.reshape(-1).take(flat, out=put[key], mode="clip")      # unbuffered: flat is valid
+            h = np.add(w2, put["w2j"], out=inverse)
             np.divide(1.0, h, out=h)
             h.reshape(-1)[flat] = 0.0
-            out.update(s1j=s1.reshape(-1).take(flat), w2j=w2j, ch=_dot(c, h), sh=_dot(s1, h),
-                       sj=s.reshape(-1).take(flat), pj=p.reshape(-1).take(flat), cj=c.reshape(-1).take(flat))
-        for k, v in out.items():
-            sums[k][rows] = v
-        if low:
-            slow[rows] |= ~(np.minimum(w1.min(axis=0), w2.min(axis=0)) > _RECIPROCAL_FLOOR)
+            np.einsum("ij,ij->j", c, h, out=put["ch"])
+            np.einsum("ij,ij->j", s1, h, out=put["sh"])
+        slow[rows] = near
 
     def _three_rows(self, sums: dict, positions: np.ndarray | None):
         """The per-row formulas of the second fold (:meth:`_Fold.totals`, :meth:`_Fold.selected`) on whole columns.
