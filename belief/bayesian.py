@@ -1381,15 +1381,14 @@ def _pair_shares(s: np.ndarray, p: np.ndarray, w: np.ndarray, sigma: Callable[[]
     return out
 
 
-def _pair_sums(weights: np.ndarray, s: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """Σ_{l≠i} k_il / (x_i + x_l) for every i, k_il = s_i p_l + s_l p_i, for weights x above :data:`_RECIPROCAL_FLOOR`.
+def _pair_sums(weights: np.ndarray, s: np.ndarray, p: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """``out`` plus Σ_{l≠i} k_il / (x_i + x_l) for every i, k_il = s_i p_l + s_l p_i, in place; shape (|O|, B).
 
     The direct branch of :func:`_share_products` without its last product by x_i, which the
-    caller folds into its own; a row with a weight at the floor or below gets no meaningful
-    value and must be computed again.
+    caller folds into its own, for weights x above :data:`_RECIPROCAL_FLOOR`: a row with a
+    weight at the floor or below gets no meaningful value and must be computed again.
     """
     o, n = s.shape
-    out = np.zeros((o, n))
     pair, share, term = np.empty((o - 1, n)), np.empty((o - 1, n)), np.empty((o - 1, n))
     for d in range(1, o):
         m = o - d
@@ -1695,7 +1694,7 @@ class RRuleFusion(_Fusion):
         fold on their own, so that every row gets the arithmetic of :class:`_Fold`.
         """
         n, union = self.rows, self.union
-        sums = {k: np.empty(n) for k in ("r1", "s0", "t1", "w1", "f1", "k1", "a2", "s1", "w2", "k2", "f2", "g2", "t2",
+        sums = {k: np.empty(n) for k in ("r1", "s0", "t1", "w1", "f1", "k1", "a2", "s1", "w2", "f2", "g2", "t2",
                                          "f", "pf", "cf")}
         if positions is not None:
             sums.update({k: np.empty(n) for k in ("sj", "pj", "cj", "s1j", "w2j", "ch", "sh")})
@@ -1749,22 +1748,21 @@ class RRuleFusion(_Fusion):
         np.divide(1.0, inverse, out=inverse)                 # 1 / (w_i + w_F)
         k1 = s * p_f
         k1 += f * p
-        to_singles = _pair_sums(w1, s, p)                    # Σ_{l≠i} k_il / (w_i + w_l)
-        ki = np.multiply(k1, inverse, out=inverse)
-        to_singles += ki                                     # k_iF / (w_i + w_F)
+        ki = np.multiply(k1, inverse, out=inverse)          # k_iF / (w_i + w_F)
         f1 = reduce(ki, 0, out=put["f1"])
+        to_singles = _pair_sums(w1, s, p, ki)                # + Σ_{l≠i} k_il / (w_i + w_l)
         f1 *= w_f
         f1 *= rho1
         f1 += w_f                                            # m′(F)
         to_singles *= w1
         to_singles *= rho1
         s1 = np.add(to_singles, w1, out=to_singles)          # m′(θ_i)
-        reduce(s, 0, out=put["s0"])
-        reduce(p, 0, out=put["t1"])
+        s_total, t = reduce(s, 0, out=put["s0"]), reduce(p, 0, out=put["t1"])
         reduce(w1, 0, out=put["w1"])
         reduce(s1, 0, out=put["s1"])
         reduce(c, 0, out=put["t2"])
-        k_total = reduce(k1, 0, out=put["k1"])
+        k_total = np.multiply(s_total, p_f, out=put["k1"])  # Σ_i k_iF, a sum of non-negative terms
+        k_total += f * t
         # Second fold: R needs Σ|m′(θ_i) − c_i|, m0 weighs w_i = (m′(θ_i) + m′(θ_i ∪ F)) c_i.
         np.subtract(s1, c, out=d)
         reduce(np.abs(d, out=d), 0, out=put["a2"])
@@ -1782,7 +1780,6 @@ class RRuleFusion(_Fusion):
         w2_f = (f1 + u_total) * c_f
         k2 = s1 * c_f
         k2 += np.multiply(f1, c, out=d)
-        reduce(k2, 0, out=put["k2"])
         inverse = np.add(w2, w2_f, out=d)
         np.divide(1.0, inverse, out=inverse)
         np.einsum("ij,ij->j", k2, inverse, out=put["f2"])                 # Σ k_iF / (w_i + w_F)
@@ -1830,7 +1827,9 @@ class RRuleFusion(_Fusion):
         s1, w2 = sums["s1"], sums["w2"]
         spread = np.maximum((s1 + u1) * t2 - w2, 0.0)
         q_p_f = q1 * c_f
-        r_k = r * sums["k2"]
+        r_k = s1 * c_f                                       # Σ_i k_iF of the second fold
+        r_k += f1 * t2
+        r_k *= r
         totals = {"s": w2 + rho * (spread + sums["g2"]),
                   "f": w_f + rho * (sums["f2"] * w_f + half * q_p_f),
                   "u": r_k if union else np.zeros(self.rows),
