@@ -823,31 +823,51 @@ def bhattacharyya(histograms: np.ndarray, references: np.ndarray) -> np.ndarray:
     return rho[0] if histograms.ndim == 1 else rho
 
 
-def _sparse_rho(counts: np.ndarray, norms, root_references: np.ndarray) -> np.ndarray:
+class _Filled(NamedTuple):
+    """Where the non-zero counts of n histograms of B bins are, box by box."""
+
+    positions: np.ndarray               # (F,) flat positions in the (n, B) counts, increasing
+    boxes: np.ndarray                   # (F,) the box of each
+    bins: np.ndarray                    # (F,) the bin of each
+    starts: np.ndarray                  # (n + 1,) the first entry of each box, then F
+    nonempty: np.ndarray | None         # the boxes with an entry; None when every box has one
+
+
+def _filled(counts: np.ndarray) -> _Filled:
+    """The :class:`_Filled` of ``counts``, shape (n, B)."""
+    n_boxes, n_bins = counts.shape
+    positions = np.flatnonzero(counts != 0)            # a boolean pass: nonzero() on floats is slower
+    boxes = positions // n_bins
+    starts = np.searchsorted(boxes, np.arange(n_boxes + 1))
+    has_entries = starts[1:] > starts[:-1]
+    return _Filled(positions, boxes, positions - boxes * n_bins, starts,
+                   None if has_entries.all() else np.flatnonzero(has_entries))
+
+
+def _sparse_rho(counts: np.ndarray, norms, root_references: np.ndarray, filled: _Filled | None = None) -> np.ndarray:
     """Σ_u √(h_p(u)) r_k(u) for n histograms h_p = counts_p / norm_p, shape (n, K).
 
     ``counts`` has shape (n, B), C-contiguous; ``norms`` is one number for all, or one per box
     (shape (n, 1)); ``root_references`` is √q, shape (B, K).  Each h_p(u) is the quotient of
     the dense histogram, and each box's terms are added in the order of its bins, so only
-    the order of the additions differs from a dense product.
+    the order of the additions differs from a dense product.  ``filled`` (optional) may
+    name more positions than the non-zero counts, such as those of histograms of the same
+    points without a mask: a zero count adds a zero term (the sums agree to rounding).
     """
-    n_boxes, n_bins = counts.shape
-    rho = np.zeros((n_boxes, root_references.shape[1]))
-    filled = np.flatnonzero(counts != 0)               # a boolean pass: nonzero() on floats is slower
-    if filled.size == 0:
-        return rho
-    boxes = filled // n_bins
-    roots = counts.ravel()[filled]
-    roots /= norms if np.ndim(norms) == 0 else np.ravel(norms)[boxes]
+    n_boxes = counts.shape[0]
+    if filled is None:
+        filled = _filled(counts)
+    if filled.positions.size == 0:
+        return np.zeros((n_boxes, root_references.shape[1]))
+    roots = counts.ravel()[filled.positions]
+    roots /= norms if np.ndim(norms) == 0 else np.ravel(norms)[filled.boxes]
     np.sqrt(roots, out=roots)
-    terms = np.take(root_references, filled - boxes * n_bins, axis=0)              # (filled, K)
+    terms = np.take(root_references, filled.bins, axis=0)                          # (filled, K)
     terms *= roots[:, None]
-    starts = np.searchsorted(boxes, np.arange(n_boxes + 1))                        # each box's first bin
-    filled_boxes = starts[1:] > starts[:-1]
-    if filled_boxes.all():                                                         # the usual case
-        return np.add.reduceat(terms, starts[:-1], axis=0)
-    nonempty = np.flatnonzero(filled_boxes)
-    rho[nonempty] = np.add.reduceat(terms, starts[nonempty], axis=0)
+    if filled.nonempty is None:                                                    # the usual case
+        return np.add.reduceat(terms, filled.starts[:-1], axis=0)
+    rho = np.zeros((n_boxes, root_references.shape[1]))
+    rho[filled.nonempty] = np.add.reduceat(terms, filled.starts[filled.nonempty], axis=0)
     return rho
 
 
@@ -1428,9 +1448,12 @@ def _score_together(cues: list, obs: Observation, states: np.ndarray, owner: np.
         block = slice(start, start + HISTOGRAM_BLOCK)
         sampling = _sample(centres[block], sizes[block], first.config.samples, bin_image.shape, masked)
         slots = _slots(bin_image, sampling, width, compact)
-        for cue, root, rho in zip(cues, roots, rhos):
-            counts, norms = cue._block_counts(obs, features, sampling, slots, width)
-            rho[block] = _sparse_rho(counts.reshape(-1, width), norms, root)
+        counted = [cue._block_counts(obs, features, sampling, slots, width) for cue in cues]
+        # A mask only removes points, so the filled bins of an unmasked cue cover those of all.
+        shared = next((_filled(counts.reshape(-1, width)) for cue, (counts, _) in zip(cues, counted)
+                       if not cue._masked), None) if len(cues) > 1 else None
+        for (counts, norms), root, rho in zip(counted, roots, rhos):
+            rho[block] = _sparse_rho(counts.reshape(-1, width), norms, root, shared)
     scores = []
     for cue, rho in zip(cues, rhos):
         np.clip(rho, 0.0, 1.0, out=rho)
