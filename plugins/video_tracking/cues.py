@@ -59,6 +59,7 @@ __all__ = [
     "CUES",
     "make_cue",
     "score_cues",
+    "template_similarity",
     "colour_bins",
     "orientation_bins",
     "kernel_grid",
@@ -1211,7 +1212,8 @@ class ColourCue:
     def log_likelihoods(self, obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
         """log p_1 … log p_τ, log p_FA = −(1 − ρ) / (2σ²) of every particle, shape (P, τ + 1) (W (16)–(19))."""
         states, owner = _particles(obs, states, owner)
-        return _score_together([self], obs, states, owner)[0]
+        rho = _rho_together([self], obs, states, owner)[0]
+        return _log_gaussian(1.0 - rho, self.config.sigma)                          # d² = 1 − ρ (W (17))
 
     def _check_targets(self, obs: Observation) -> None:
         if obs.n_targets != self.n_targets:
@@ -1402,21 +1404,76 @@ def score_cues(cues, obs: Observation, states: np.ndarray, owner: np.ndarray) ->
     """
     states, owner = _particles(obs, states, owner)
     scores: list = [None] * len(cues)
-    groups: dict[tuple, list[int]] = {}
-    for index, cue in enumerate(cues):
-        if isinstance(cue, ColourCue) and type(cue).log_likelihoods is ColourCue.log_likelihoods:
-            bin_image, weights = cue._frame_features(obs)          # memoised on obs: the ids stay valid
-            groups.setdefault((id(bin_image), id(weights), cue.config.n_bins, cue.config.samples), []).append(index)
-        else:
-            scores[index] = cue.log_likelihoods(obs, states, owner)
-    for members in groups.values():
-        for index, score in zip(members, _score_together([cues[i] for i in members], obs, states, owner)):
-            scores[index] = score
+    groups, others = _sampling_groups(cues, obs)
+    for index in others:
+        scores[index] = cues[index].log_likelihoods(obs, states, owner)
+    for members in groups:
+        rhos = _rho_together([cues[i] for i in members], obs, states, owner)
+        for index, rho in zip(members, rhos):
+            scores[index] = _log_gaussian(1.0 - rho, cues[index].config.sigma)       # d² = 1 − ρ (W (17))
     return tuple(scores)
 
 
-def _score_together(cues: list, obs: Observation, states: np.ndarray, owner: np.ndarray) -> list[np.ndarray]:
-    """:meth:`ColourCue.log_likelihoods` of colour cues that share their features and grid, each box sampled once.
+def template_similarity(cues, obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
+    """ρ (L (12)) of every box with its owner's current template, the smallest over the appearance ``cues``.
+
+    How much a target's window still looks like the target; the colour cues share their
+    sampling as in :func:`score_cues`.
+
+    Parameters
+    ----------
+    cues : sequence of AppearanceCue
+        At least one.
+    obs : Observation
+    states : ndarray, shape (P, 5)
+    owner : ndarray of int, shape (P,)
+
+    Returns
+    -------
+    ndarray, shape (P,)
+
+    Examples
+    --------
+    >>> image = np.full((60, 80, 3), 128, np.uint8)
+    >>> image[20:40, 30:40] = (0, 0, 255)
+    >>> cue = ColourCue(ColourConfig(samples=(6, 12)))
+    >>> cue.set_templates(image, np.array([[30, 20, 10, 20]]))
+    >>> obs = Observation(image, None, [[35.0, 30.0]], [[10.0, 20.0]], np.zeros((0, 2)))
+    >>> template_similarity([cue], obs, np.array([[35.0, 30.0, 0, 0, 0], [60.0, 30.0, 0, 0, 0]]), np.array([0, 0]))
+    array([1., 0.])
+    """
+    if not cues:
+        raise TrackingError("template_similarity needs at least one appearance cue")
+    states, owner = _particles(obs, states, owner)
+    rows = np.arange(owner.size)
+    found = []
+    groups, others = _sampling_groups(cues, obs)
+    for index in others:
+        cue = cues[index]
+        found.append(bhattacharyya(cue.histograms(obs, states, owner), cue.templates)[rows, owner])
+    for members in groups:
+        found.extend(rho[rows, owner] for rho in _rho_together([cues[i] for i in members], obs, states, owner))
+    return np.min(found, axis=0)
+
+
+def _sampling_groups(cues, obs: Observation) -> tuple[list[list[int]], list[int]]:
+    """The indices of the colour cues that can share their sampling, by group, and those of the other cues."""
+    groups: dict[tuple, list[int]] = {}
+    others = []
+    for index, cue in enumerate(cues):
+        if isinstance(cue, ColourCue) and type(cue).log_likelihoods is ColourCue.log_likelihoods \
+                and type(cue).histograms is ColourCue.histograms:
+            bin_image, weights = cue._frame_features(obs)          # memoised on obs: the ids stay valid
+            groups.setdefault((id(bin_image), id(weights), cue.config.n_bins, cue.config.samples), []).append(index)
+        else:
+            others.append(index)
+    return list(groups.values()), others
+
+
+def _rho_together(cues: list, obs: Observation, states: np.ndarray, owner: np.ndarray) -> list[np.ndarray]:
+    """ρ of every box with every reference (τ templates, then q_FA) of colour cues that share their features and grid.
+
+    One (P, τ + 1) array per cue, in [0, 1]; each box is sampled once for all the cues.
 
     The bins that no pixel of the frame fills (with a positive weight) cannot be in any box,
     so the histograms are counted over the frame's own bins only, in their order (plus one
@@ -1454,11 +1511,9 @@ def _score_together(cues: list, obs: Observation, states: np.ndarray, owner: np.
                        if not cue._masked), None) if len(cues) > 1 else None
         for (counts, norms), root, rho in zip(counted, roots, rhos):
             rho[block] = _sparse_rho(counts.reshape(-1, width), norms, root, shared)
-    scores = []
-    for cue, rho in zip(cues, rhos):
+    for rho in rhos:
         np.clip(rho, 0.0, 1.0, out=rho)
-        scores.append(_log_gaussian(1.0 - rho, cue.config.sigma))                  # d² = 1 − ρ (W (17))
-    return scores
+    return rhos
 
 
 def _scene_counts(obs: Observation, bin_image: np.ndarray, weights: np.ndarray | None, n_bins: int) -> np.ndarray:

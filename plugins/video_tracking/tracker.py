@@ -43,7 +43,7 @@ from belief_tracking.background import BackgroundModel
 from belief_tracking.blobs import box_mask
 from belief_tracking.candidates import BlobCandidates
 from belief_tracking.config import TrackerConfig
-from belief_tracking.cues import CUES, AppearanceCue, Observation, bhattacharyya, score_cues
+from belief_tracking.cues import CUES, AppearanceCue, Observation, score_cues, template_similarity
 from belief_tracking.detections import Detections, check_rows
 from belief_tracking.errors import InitError, TrackingError
 from belief_tracking.initiation import InitPlan
@@ -341,13 +341,10 @@ class Tracker:
         The smallest Bhattacharyya coefficient ρ (L (12)) over the appearance cues; None
         without an appearance cue.
         """
-        cues = self._appearance_cues
-        if not cues:
+        if not self._appearance_cues:
             return None
         states = np.array([t.estimate for t in self.targets])
-        owner = np.arange(len(states))
-        rho = [np.diagonal(bhattacharyya(cue.histograms(obs, states, owner), cue.templates)) for cue in cues]
-        return np.min(rho, axis=0)
+        return template_similarity(self._appearance_cues, obs, states, np.arange(len(states)))
 
     def _candidates(self, detections: np.ndarray | None, foreground: np.ndarray | None) -> np.ndarray | None:
         """The frame's candidate boxes ``x, y, w, h, score``: the detections, else the foreground's person blobs."""

@@ -528,6 +528,38 @@ def test_scores_of_many_particles_are_built_block_by_block_without_changing_them
     assert np.allclose(cue.log_likelihoods(obs, states, owner), whole, rtol=0, atol=1e-12)
 
 
+def test_cues_scored_together_score_as_each_alone_and_their_template_similarity_is_the_smallest_rho():
+    from belief_tracking.cues import HISTOGRAM_BLOCK, EdgeCue, score_cues, template_similarity
+
+    rng = np.random.default_rng(8)
+    image = rng.integers(0, 256, size=(80, 120, 3), dtype=np.uint8)
+    image[:, :30] = 40                                  # a flat stripe: bins and edges the frame lacks elsewhere
+    mask = rng.random((80, 120)) < 0.5
+    boxes = np.array([[10, 10, 12, 24], [60, 30, 14, 28]])
+    cues = [ColourCue(ColourConfig(samples=(6, 12))), LocationCue(),
+            ForegroundColourCue(ColourConfig(samples=(6, 12))), EdgeCue(),
+            ForegroundColourCue(ColourConfig(bins=4, samples=(6, 12)))]
+    for cue in cues:
+        if isinstance(cue, AppearanceCue):
+            cue.set_templates(image, boxes, foreground=mask)
+    n = HISTOGRAM_BLOCK + 9
+    states = np.column_stack([rng.uniform(-5, 125, n), rng.uniform(-5, 85, n), np.zeros((n, 2)),
+                              rng.normal(0, 0.1, n)])
+    owner = rng.integers(0, 2, n)
+    fresh = lambda: Observation(image, mask, [[16.0, 22.0], [67.0, 44.0]], [[12.0, 24.0], [14.0, 28.0]],  # noqa: E731
+                                np.zeros((0, 2)))
+    together = score_cues(cues, fresh(), states, owner)
+    for cue, scores in zip(cues, together):
+        np.testing.assert_allclose(scores, cue.log_likelihoods(fresh(), states, owner), rtol=0, atol=1e-12)
+    appearance = [cue for cue in cues if isinstance(cue, AppearanceCue)]
+    obs = fresh()
+    rho = [bhattacharyya(cue.histograms(obs, states, owner), cue.templates)[np.arange(n), owner] for cue in appearance]
+    np.testing.assert_allclose(template_similarity(appearance, fresh(), states, owner), np.min(rho, axis=0),
+                               rtol=0, atol=1e-12)
+    with pytest.raises(TrackingError, match="at least one"):
+        template_similarity([], fresh(), states, owner)
+
+
 # -- the sparse Bhattacharyya sums and the compact bin image --------------------------------------
 def test_bhattacharyya_over_the_filled_bins_equals_the_dense_product_to_rounding():
     rng = np.random.default_rng(11)
