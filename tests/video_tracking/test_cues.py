@@ -645,3 +645,15 @@ def test_background_masks_of_successive_frames_are_separate_arrays():
     assert not np.shares_memory(first, second)
     np.testing.assert_array_equal(first, kept)
     assert first[10:20, 10:20].all() and not second[10:20, 10:20].any()
+
+
+@pytest.mark.parametrize("bins", range(1, 17))
+def test_colour_bins_of_every_bin_count_follow_the_formula(bins):
+    rng = np.random.default_rng(bins)
+    image = rng.integers(0, 256, size=(7, 9, 3), dtype=np.uint8)
+    image[0, :3] = [[0, 0, 0], [255, 255, 255], [31, 32, 224]]
+    channel = image.astype(np.int64) * bins // 256
+    expected = (channel[..., 2] * bins + channel[..., 1]) * bins + channel[..., 0]
+    found = colour_bins(image, bins)
+    assert found.dtype == np.uint16
+    np.testing.assert_array_equal(found, expected)
