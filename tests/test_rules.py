@@ -63,14 +63,19 @@ def popcount(mask: int) -> int:
 
 
 def ref_sources(fc: FusionCase) -> list[list[tuple[frozenset, Fraction]]]:
-    """Each source as (regions under the source model, mass), entries of one element merged."""
+    """Each source as (regions under the source model, mass), entries of one element merged.
+
+    The masses are the floats that the sources hold (entries of one element added by
+    ``math.fsum``, as a mass function merges them), taken exactly: the R-rule's paper R is
+    the square root of a distance, so two sources that are equal as fractions but differ by
+    one rounding in a merged mass have an R of about 1e-8, not 0.
+    """
     out = []
     for entries in fc.sources:
-        merged: dict[frozenset, Fraction] = {}
+        merged: dict[frozenset, list[float]] = {}
         for element, mass in entries:
-            key = fc.source.regions(element)
-            merged[key] = merged.get(key, Fraction(0)) + mass
-        out.append(list(merged.items()))
+            merged.setdefault(fc.source.regions(element), []).append(float(mass))
+        out.append([(key, Fraction(math.fsum(values))) for key, values in merged.items()])
     return out
 
 
@@ -696,6 +701,23 @@ def test_r_rule_survives_a_subnormal_m0():
     assert result["t1"] == pytest.approx((1 - math.sqrt(0.5)) * 0.125, abs=1e-15)
     assert result["t2"] == pytest.approx((1 - math.sqrt(0.5)) * 0.125, abs=1e-15)
     assert math.fsum(result.values) == pytest.approx(1.0, abs=1e-15)
+
+
+def test_r_rule_of_sources_equal_as_fractions_but_not_as_floats_matches_the_reference():
+    # 1/3 + 1/3 and 1/9 + 5/9 both merge onto t4 (t1∩t2 is empty under Shafer's model) but
+    # round to neighbouring floats: the paper R of the two is about 7e-9, not 0, and so is the
+    # mass it moves to t1 ∪ t4.
+    from tests.strategies import shafer_allowed
+
+    frame = Frame(["t1", "t2", "t3", "t4"])
+    case = ModelCase(Model.shafer(frame), shafer_allowed(4), "shafer")
+    t1, t4, tail = frame.element("t1"), frame.element("t4"), frame.element("t1&t2|t4")
+    third = Fraction(1, 3)
+    fc = FusionCase(case, case, (((t1, third), (t4, third), (tail, third)),
+                                 ((t4, Fraction(1, 9)), (tail, Fraction(5, 9)), (t1, third))))
+    result = combine(*fc.build(), rule="r_rule")
+    assert 1e-9 < result[frame.element("t1|t4")] < 1e-7
+    check_against_reference(fc, "r_rule")
 
 
 def test_r_rule_disjoint_sources_have_r_exactly_one():
