@@ -114,14 +114,8 @@ class MassFunction(_MassSlots):
                         off = abs(sum(values) - 1.0)
                         if off <= _SURELY_ONE or off <= _MAYBE_ONE and abs(exact_sum(values) - 1.0) <= SUM_TOLERANCE:
                             if type(self) is MassFunction:
-                                # Plain stores on the twin class (see _from_masks), then back to MassFunction.
                                 _set(self, "__class__", _FreshMass)
-                                self.model = model
-                                self._focal = self._values = self._batch = self._hash = self._memo = None
-                                self._masks = masks
-                                self._floats = values
-                                self._loose = True
-                                self.__class__ = MassFunction
+                                _fill(self, model, masks, values, True)
                             else:
                                 self._set_unions(model, masks, values)
                             return
@@ -273,22 +267,8 @@ class MassFunction(_MassSlots):
         ``loose`` the masks are in canonical order; with it they (lists or tuples, floats
         only) are sorted when first read.
         """
-        # A twin class without MassFunction.__setattr__ takes plain stores (cheaper than
-        # object.__setattr__), then the object becomes a MassFunction: both share one layout.
         obj = _new(_FreshMass)
-        obj.model = model
-        obj._focal = obj._batch = obj._hash = None
-        obj._masks = masks
-        obj._loose = loose
-        obj._memo = None
-        if type(values) is not np.ndarray:
-            obj._values = None
-            obj._floats = values
-        else:
-            values.flags.writeable = False
-            obj._values = values
-            obj._floats = None
-        obj.__class__ = MassFunction
+        _fill(obj, model, masks, values, loose)
         return obj
 
     def _settle(self) -> None:
@@ -635,6 +615,24 @@ class _FreshMass(_MassSlots):
 
 _new = object.__new__
 _set = object.__setattr__
+
+
+def _fill(obj: _FreshMass, model: Model, masks, values, loose: bool) -> None:
+    """Make ``obj`` the mass function of unions ``masks`` with ``values`` (see :meth:`MassFunction._from_masks`)."""
+    # A twin class without MassFunction.__setattr__ takes plain stores (cheaper than
+    # object.__setattr__), then the object becomes a MassFunction: both share one layout.
+    obj.model = model
+    obj._focal = obj._batch = obj._hash = obj._memo = None
+    obj._masks = masks
+    obj._loose = loose
+    if type(values) is not np.ndarray:
+        obj._values = None
+        obj._floats = values
+    else:
+        values.flags.writeable = False
+        obj._values = values
+        obj._floats = None
+    obj.__class__ = MassFunction
 
 
 def _spaced_unions(mass: MassFunction, masses: Mapping, model: Model, bit: dict[str, int]) -> bool:

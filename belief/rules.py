@@ -36,7 +36,7 @@ from belief.batch import SUM_TOLERANCE, MassBatch, check_refines
 from belief.bayesian import ENGINES
 from belief.errors import BeliefError, FrameError, InvalidMassError, ModelError, TotalConflictError
 from belief.frame import Element
-from belief.mass import MassFunction, _FreshMass, _new, _set, _union_context
+from belief.mass import MassFunction, _set, _union_context
 from belief.model import Model
 from belief.plan import (Encoding, FoldBudget, Scatter, TuplePlan, _exclusive, canonical_codes, check_joint,
                          coded_fast, decode, encode, evict, gather_product, plan_lookup, row_chunks, sighted,
@@ -910,28 +910,7 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
         del groups[0]
     sums = [group if type(group) is float else group[0] + group[1] if len(group) == 2 else fsum(group)
             for group in groups.values()]
-    # _pair_result inlined, and the new mass function made in place: a first call on new
-    # focal elements pays for every function it enters.
-    focal = list(groups)
-    scale = fsum(sums)
-    if normalise:
-        if not scale > WIDE_SCALE:
-            return None
-        sums = [x / scale for x in sums]
-    elif RESULT_TOLERANCE < abs(scale - 1.0) <= _PAIR_REACH:
-        sums = [x / scale for x in sums]
-    if not min(values1) * min(values2) > 0 and not all(x > 0 for x in sums):    # see _pair_result
-        pairs = [(f, x) for f, x in zip(focal, sums) if x > 0]
-        focal = [f for f, _ in pairs]
-        sums = [x for _, x in pairs]
-    out = _new(_FreshMass)
-    out.model = model
-    out._focal = out._values = out._batch = out._hash = out._memo = None
-    out._masks = focal
-    out._floats = sums
-    out._loose = True
-    out.__class__ = MassFunction
-    return out
+    return _pair_result(model, list(groups), sums, normalise, min(values1) * min(values2) > 0)
 
 
 #: What :func:`_renormalised` rescales in the result of two sources.
