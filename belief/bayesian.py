@@ -1061,7 +1061,10 @@ class _Fold:
                 u = np.zeros(rows.size) if fresh else state.u[hyp, rows]
                 total = sigma + own_f + u
                 self.to_target[hyp, rows] = sigma / total
-                self.fallback = (rows, self.k_f[hyp, rows] * own_f / total)     # what F gets there
+                # What F gets there, the ratio first (≤ 1): k_iF · (f + p_F) underflows for masses
+                # near 1e-150 while the share itself is representable, and F's m0 weight in the
+                # next fold may be that share alone.
+                self.fallback = (rows, self.k_f[hyp, rows] * (own_f / total))
                 self.to_union = np.zeros(s.shape)
                 self.to_union[hyp, rows] = u / total
         self.flagged = np.zeros(s.shape[1], dtype=bool)

@@ -295,6 +295,24 @@ def test_masses_that_underflow_in_products(rule, options):
             check(model, rule, options, arrays, False, rng)
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+@pytest.mark.parametrize("r_mode, want_f", [("paper", 0.04027836789673436), ("euclid", 0.08600311862586871)])
+def test_a_fallback_share_whose_product_underflows(r_mode, want_f):
+    # SPEC A.4 fallback in the first fold: θ2 against FA has k = 1e-134 · 1e-83 and no m0
+    # weight, so FA gets k · 1e-134 / 1e-83 = 1e-268, whose product k · 1e-134 underflows.
+    # That m(FA) is the whole m0(FA) of the next fold, where m0(θ1) = 0.5 · 1e-268 is of the
+    # same size: losing it hands θ1 a share of the conflict θ1 / FA that belongs to FA.
+    # Exact values from the literal rule in rational arithmetic.
+    model = Model.for_targets(4)
+    arrays = [np.array([[0.5, 0.0, 0.0, 0.5, 1e-134]]),
+              np.array([[0.45, 1e-83, 0.1, 0.45, 0.0]]),
+              np.array([[1e-268, 0.0, 0.0, 0.5, 0.5]])]
+    options = {"r_mode": r_mode, "empty_mode": "empty"}
+    check(model, "r_rule", options, arrays, False, np.random.default_rng(0))
+    fused = combine(*(MassBatch.bayesian(a, model=model) for a in arrays), rule="r_rule", **options)
+    assert fused.mass(["FA"])[0, 0] == pytest.approx(want_f, rel=1e-12)
+
+
 def test_the_conflict_strategy_reaches_total_conflict():
     # A counting check of the near-conflict inputs above: many rows reach m(∅) ≥ 1 − 1e-12.
     rng = np.random.default_rng(3)
