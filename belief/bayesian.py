@@ -1387,8 +1387,8 @@ def _pair_shares(s: np.ndarray, p: np.ndarray, w: np.ndarray, sigma: Callable[[]
 def _pair_sums(weights: np.ndarray, s: np.ndarray, p: np.ndarray, out: np.ndarray) -> np.ndarray:
     """``out`` plus Σ_{l≠i} k_il / (x_i + x_l) for every i, k_il = s_i p_l + s_l p_i, in place; shape (|O|, B).
 
-    The direct branch of :func:`_share_products` without its last product by x_i, which the
-    caller folds into its own, for weights x above :data:`_RECIPROCAL_FLOOR`: a row with a
+    The direct branch of :func:`_share_products`, without its last product by x_i (which
+    that function, or a caller, folds into its own), for weights x above :data:`_RECIPROCAL_FLOOR`: a row with a
     weight at the floor or below gets no meaningful value and must be computed again.
     """
     o, n = s.shape
@@ -1428,7 +1428,10 @@ def _share_products(weights: np.ndarray, s: np.ndarray, p: np.ndarray, members: 
         b = rows.stop - rows.start
         x = weights[:, rows] if members is None else np.where(members[:, rows], weights[:, rows], 0.0)
         sr, pr, acc = s[:, rows], p[:, rows], out[:, rows]
-        direct = safe is not None and bool(safe[rows].all())
+        if safe is not None and bool(safe[rows].all()):
+            _pair_sums(x, sr, pr, acc)
+            acc *= x
+            continue
         for d in range(1, o):
             m = o - d
             d_il, k_il, t = pair[:m, :b], share[:m, :b], term[:m, :b]
@@ -1438,20 +1441,13 @@ def _share_products(weights: np.ndarray, s: np.ndarray, p: np.ndarray, members: 
             if members is not None:
                 k_il *= members[:m, rows]
                 k_il *= members[d:, rows]
-            if direct:
-                k_il /= d_il
-                acc[:m] += k_il
-                acc[d:] += k_il
-            else:
-                np.maximum(d_il, _TINY, out=d_il)             # x_i ≤ x_i + x_l: only 0/0 pairs change, to 0
-                np.divide(x[:m], d_il, out=t)
-                t *= k_il
-                acc[:m] += t
-                np.divide(x[d:], d_il, out=t)
-                t *= k_il
-                acc[d:] += t
-        if direct:
-            acc *= x
+            np.maximum(d_il, _TINY, out=d_il)                 # x_i ≤ x_i + x_l: only 0/0 pairs change, to 0
+            np.divide(x[:m], d_il, out=t)
+            t *= k_il
+            acc[:m] += t
+            np.divide(x[d:], d_il, out=t)
+            t *= k_il
+            acc[d:] += t
     return out
 
 
