@@ -313,13 +313,20 @@ _WIDE_SCALE = 2.0 ** -600
 class _Underflow(Exception):
     """The closed form of Dempster's rule would divide by a non-empty mass that may have underflowed."""
 
-#: Pair weights above this have a finite 1 / (x_i + x_l) whose products with masses stay finite.
-_RECIPROCAL_FLOOR = 1e-150
+#: Pair weights above this (a normal number) have a finite, exact 1 / (x_i + x_l) whose products
+#: with masses (≤ 1), and sums of fewer than 10¹⁷ of those, stay finite.
+_RECIPROCAL_FLOOR = 2.0 ** -960
 
 
 def _above(values: np.ndarray, floor: float) -> bool:
     """Whether every value exceeds ``floor`` (NaN does not): one pass, no mask."""
     return not values.size or bool(values.min() > floor)
+
+
+def _below(values: np.ndarray, rows: np.ndarray) -> None:
+    """Mark in ``rows`` the columns of (K, B) ``values`` with an entry at or below the floor (or NaN)."""
+    if not _above(values, _RECIPROCAL_FLOOR):
+        rows |= ~(values.min(axis=0) > _RECIPROCAL_FLOOR)
 
 
 def _ratio(numerator: np.ndarray, denominator: np.ndarray) -> np.ndarray:
@@ -1203,7 +1210,7 @@ class _Fold:
         """
         st, p, k_f, rho, r = self.state, self.p, self.k_f, self.rho, self.r
         s = st.s
-        to_singles = _pair_shares(s, p, self.w, lambda: self.sigma)
+        to_singles = _pair_shares(s, p, self.w)
         to_singles += k_f * self.to_target
         to_unions = None if self.to_union is None else k_f * self.to_union
         if positions is None:
@@ -1365,38 +1372,39 @@ def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.add.reduce(a * b, 0)
 
 
-def _pair_shares(s: np.ndarray, p: np.ndarray, w: np.ndarray, sigma: Callable[[], np.ndarray]) -> np.ndarray:
+def _pair_shares(s: np.ndarray, p: np.ndarray, w: np.ndarray) -> np.ndarray:
     """Σ_{l≠i} k_il m0(θ_i) / (m0(θ_i) + m0(θ_l)) for every i, k_il = s_i p_l + s_l p_i (support fallback).
 
-    The sum does not factorise: one (|O|, |O|) matrix per row, built in blocks of rows.  A
-    pair without m0 weight is split σ_i : σ_l instead (SPEC A.4); its k_il is positive
-    only if one target has running mass and the other cue mass, which picks the few rows
-    for the second pass.  ``sigma()`` gives the supports σ, formed only if some row needs them.
+    The sum does not factorise: one (|O|, |O|) matrix per row, built by :func:`_pair_sums`
+    and multiplied by w_i once; the pairs whose weights sum below the floor are then
+    corrected by :func:`_low_pairs`, where a pair without m0 weight is split by support
+    σ_i : σ_l, σ = s + p (SPEC A.4).  Shape (|O|, B).
     """
-    out = _share_products(w, s, p, None)
-    if w.all():
-        return out
-    absent = ~(w > 0)
-    pending = (absent & (s > 0)).any(axis=0) & (absent & (p > 0)).any(axis=0)
-    if pending.any():
-        rows = np.flatnonzero(pending)
-        out[:, rows] += _share_products(sigma()[:, rows], s[:, rows], p[:, rows], absent[:, rows])
-    return out
+    out = _pair_sums(w, s, p, np.zeros(s.shape))
+    out *= w
+    return _low_pairs(w, s, p, out)
 
 
 def _pair_sums(weights: np.ndarray, s: np.ndarray, p: np.ndarray, out: np.ndarray) -> np.ndarray:
-    """``out`` plus Σ_{l≠i} k_il / (x_i + x_l) for every i, k_il = s_i p_l + s_l p_i, in place; shape (|O|, B).
+    """``out`` plus Σ_{l≠i} k_il / max(x_i + x_l, floor) for every i, k_il = s_i p_l + s_l p_i, in place.
 
-    The direct branch of :func:`_share_products`, without its last product by x_i (which
-    that function, or a caller, folds into its own), for weights x above :data:`_RECIPROCAL_FLOOR`: a row with a
-    weight at the floor or below gets no meaningful value and must be computed again.
+    Shape (|O|, B).  Both k and D = x_i + x_l are symmetric, so each unordered pair is formed
+    once, the pairs (i, i + d) of one offset d together, and G_il = k_il / D_il goes to both
+    ends; a caller multiplies by x_i last.  The floor (:data:`_RECIPROCAL_FLOOR`, a normal
+    number) keeps every G finite and exact for the pairs above it (k ≤ 2, so G ≤ 2 / floor
+    and a sum of fewer than 10¹⁷ of them stays finite); the pairs below it, both of whose
+    weights lie below the floor, get x_i G ≤ k x_i / floor, which :func:`_low_pairs` tops up
+    to their exact share.
     """
     o, n = s.shape
+    clamp = not _above(weights, 0.5 * _RECIPROCAL_FLOOR)     # x_i + x_l ≥ 2 min x
     pair, share, term = np.empty((o - 1, n)), np.empty((o - 1, n)), np.empty((o - 1, n))
     for d in range(1, o):
         m = o - d
         d_il, k_il, t = pair[:m], share[:m], term[:m]
         np.add(weights[:m], weights[d:], out=d_il)
+        if clamp:
+            np.maximum(d_il, _RECIPROCAL_FLOOR, out=d_il)
         np.multiply(s[:m], p[d:], out=k_il)
         k_il += np.multiply(s[d:], p[:m], out=t)
         k_il /= d_il
@@ -1405,49 +1413,60 @@ def _pair_sums(weights: np.ndarray, s: np.ndarray, p: np.ndarray, out: np.ndarra
     return out
 
 
-def _share_products(weights: np.ndarray, s: np.ndarray, p: np.ndarray, members: np.ndarray | None) -> np.ndarray:
-    """Σ_{l≠i} k_il x_i / (x_i + x_l) for every i, k_il = s_i p_l + s_l p_i, over members i ≠ l (0 if x_i + x_l = 0).
+def _low_pairs(weights: np.ndarray, s: np.ndarray, p: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """``out`` (x_i Σ_l G_il of :func:`_pair_sums`) topped up to the exact shares of the pairs below the floor.
 
-    Both k and D = x_i + x_l are symmetric, so each unordered pair is formed once, the pairs
-    (i, i + d) of one offset d together.  Blocks of rows whose weights are all above
-    :data:`_RECIPROCAL_FLOOR` add G_il = k_il / D_il to both ends and multiply by x_i last
-    (k ≤ 2 and D > 2·10⁻¹⁵⁰ keep G finite); the others form the ratio x_i / D first, which is
-    at most 1 whatever the weights (masses of 1e-300 and below, from likelihoods that
-    underflow, cannot overflow it), and count only the pairs of two members.
+    A pair with D = x_i + x_l below :data:`_RECIPROCAL_FLOOR` got k x_i / floor; its exact
+    share is k x_i / D, formed ratio first (x_i / D ≤ 1, so weights of 1e-300 and below
+    cannot overflow it), and with D = 0 (no m0 weight) k σ_i / (σ_i + σ_l), σ = s + p
+    (SPEC A.4).  The missing part, k (x_i / D)(1 − D / floor) or the whole fallback share,
+    is non-negative and is added.  Both weights of such a pair lie below the floor, and
+    k_il = s_i p_l + s_l p_i is a sum of two products s_a p_b, so each row's low targets
+    with running mass (a) and those with cue mass (b) are gathered into two compact lists
+    first, and the product s_a p_b is shared out on their (a, b) grid; shape (|O|, B).
     """
-    o, n = s.shape
-    out = np.zeros((o, n))
-    if o < 2:
+    if _above(weights, _RECIPROCAL_FLOOR):
         return out
-    block = max(64, PAIR_BLOCK_ENTRIES // max(o * o, 1))
-    safe = None if members is not None or not n else np.min(weights, axis=0) > _RECIPROCAL_FLOOR
-    size = min(block, n)
-    pair, share, term = np.empty((o - 1, size)), np.empty((o - 1, size)), np.empty((o - 1, size))
-    for start in range(0, n, block):
-        rows = slice(start, min(n, start + block))
-        b = rows.stop - rows.start
-        x = weights[:, rows] if members is None else np.where(members[:, rows], weights[:, rows], 0.0)
-        sr, pr, acc = s[:, rows], p[:, rows], out[:, rows]
-        if safe is not None and bool(safe[rows].all()):
-            _pair_sums(x, sr, pr, acc)
-            acc *= x
-            continue
-        for d in range(1, o):
-            m = o - d
-            d_il, k_il, t = pair[:m, :b], share[:m, :b], term[:m, :b]
-            np.add(x[:m], x[d:], out=d_il)
-            np.multiply(sr[:m], pr[d:], out=k_il)
-            k_il += np.multiply(sr[d:], pr[:m], out=t)
-            if members is not None:
-                k_il *= members[:m, rows]
-                k_il *= members[d:, rows]
-            np.maximum(d_il, _TINY, out=d_il)                 # x_i ≤ x_i + x_l: only 0/0 pairs change, to 0
-            np.divide(x[:m], d_il, out=t)
-            t *= k_il
-            acc[:m] += t
-            np.divide(x[d:], d_il, out=t)
-            t *= k_il
-            acc[d:] += t
+    low = weights < _RECIPROCAL_FLOOR
+    with_s, with_p = low & (s > 0), low & (p > 0)
+    if not (with_s.any() and with_p.any()):
+        return out
+    n = weights.shape[1]
+
+    def compact(mask):
+        # Each row's members, in order, down the first axis of a (size, B) table of flat
+        # indices; the padding reads entry 0, which ``kept`` zeroes.
+        column, hyp = np.nonzero(mask.T)
+        counts = np.bincount(column, minlength=n)
+        place = np.arange(column.size) - (np.cumsum(counts) - counts)[column]
+        flat = np.zeros((int(counts.max()), n), dtype=np.intp)
+        flat[place, column] = hyp * n + column
+        kept = np.zeros(flat.shape, dtype=bool)
+        kept[place, column] = True
+        return flat, kept, (hyp, column, place)
+
+    def gather(values, flat, kept):
+        return np.ascontiguousarray(values).reshape(-1).take(flat) * kept
+
+    flat_a, kept_a, where_a = compact(with_s)
+    flat_b, kept_b, where_b = compact(with_p)
+    x_a, x_b = gather(weights, flat_a, kept_a)[:, None], gather(weights, flat_b, kept_b)[None]
+    s_a, p_b = gather(s, flat_a, kept_a), gather(p, flat_b, kept_b)
+    sigma_a = (s_a + gather(p, flat_a, kept_a))[:, None]
+    sigma_b = (p_b + gather(s, flat_b, kept_b))[None]
+    term = s_a[:, None] * p_b[None]                                  # s_a p_b on the (a, b, row) grid
+    term *= flat_a[:, None] != flat_b[None]                          # pairs of two targets
+    total = x_a + x_b
+    weighed = total > 0
+    # 1 − D / floor where m0 weighs the pair (0 for D ≥ floor: _pair_sums was exact), 1 for the fallback.
+    term *= np.where(weighed, np.maximum(1.0 - total / _RECIPROCAL_FLOOR, 0.0), 1.0)
+    np.maximum(np.where(weighed, total, sigma_a + sigma_b), _TINY, out=total)
+    to_a = np.where(weighed, x_a, sigma_a) / total
+    to_a *= term
+    to_b = np.where(weighed, x_b, sigma_b) / total
+    to_b *= term
+    for (hyp, column, place), extra in ((where_a, to_a.sum(axis=1)), (where_b, to_b.sum(axis=0))):
+        out[hyp, column] += extra[place, column]
     return out
 
 
@@ -1681,16 +1700,19 @@ class RRuleFusion(_Fusion):
             self._full = every
 
     def _run_three(self, positions: np.ndarray | None) -> None:
-        """:meth:`_run` for three cues and the R of W (10) as printed, where every weight w_i is above the floor.
+        """:meth:`_run` for three cues and the R of W (10) as printed.
 
-        The two folds of :class:`_Fold` in the case that every row of a tracker meets: m0
-        weighs every target of both folds (w_i > :data:`_RECIPROCAL_FLOOR`), so neither
-        SPEC A.4 fallback nor a flagged class arises in the first fold, and the second one
-        has no θ_S ∪ F to start from.  Blocks of rows give only the sums over the targets
-        that the second fold needs; its per-row formulas (R of W (10), the totals and the
-        selected target) then run once on whole columns.  Rows below the floor, and rows
-        whose R may be exactly 1 (disjoint focal sets), are folded again by the general
-        fold on their own, so that every row gets the arithmetic of :class:`_Fold`.
+        The two folds of :class:`_Fold` in the case that nearly every row of a tracker meets:
+        m0 weighs every pair of a target with F in both folds (w_i + w_F above
+        :data:`_RECIPROCAL_FLOOR`), and the selected target with every other one, so no
+        flagged class arises in the first fold, and the second one has no θ_S ∪ F to start
+        from.  The pairs of targets in the first fold may be as small as they come (particles
+        far from a target give it likelihoods of 1e-300, or 0): :func:`_low_pairs` gives them
+        their exact shares.  Blocks of rows give only the sums over the targets that the
+        second fold needs; its per-row formulas (R of W (10), the totals and the selected
+        target) then run once on whole columns.  The other rows, and rows whose R may be
+        exactly 1 (disjoint focal sets), are folded again by the general fold on their own,
+        so that every row gets the arithmetic of :class:`_Fold`.
         """
         n, union = self.rows, self.union
         sums = {k: np.empty(n) for k in ("r1", "s0", "t1", "w1", "f1", "k1", "a2", "s1", "w2", "f2", "g2", "t2",
@@ -1740,10 +1762,9 @@ class RRuleFusion(_Fusion):
         # First fold (its state is fresh): k_il of every pair to θ_i and θ_l as w_i : w_l, k_iF to
         # θ_i and F as w_i : w_F, R·k_iF to θ_i ∪ F (or ∅).
         w1 = np.multiply(s, p, out=d)
-        if not _above(w1, _RECIPROCAL_FLOOR):
-            near |= ~(w1.min(axis=0) > _RECIPROCAL_FLOOR)
         w_f = f * p_f
         inverse = w1 + w_f
+        _below(inverse, near)
         np.divide(1.0, inverse, out=inverse)                 # 1 / (w_i + w_F)
         k1 = s * p_f
         k1 += f * p
@@ -1754,6 +1775,7 @@ class RRuleFusion(_Fusion):
         f1 *= rho1
         f1 += w_f                                            # m′(F)
         to_singles *= w1
+        _low_pairs(w1, s, p, to_singles)                     # the pairs whose weights sum below the floor
         to_singles *= rho1
         s1 = np.add(to_singles, w1, out=to_singles)          # m′(θ_i)
         s_total, t = reduce(s, 0, out=put["s0"]), reduce(p, 0, out=put["t1"])
@@ -1773,13 +1795,15 @@ class RRuleFusion(_Fusion):
             w2 = s1.copy()
             u_total = 0.0
         w2 *= c
-        if not _above(w2, _RECIPROCAL_FLOOR):
-            near |= ~(w2.min(axis=0) > _RECIPROCAL_FLOOR)
+        if self.union and not w2.all():
+            # θ_l ∪ F against a target θ_i that m0 does not weigh takes SPEC A.4's fallback: the general fold.
+            near |= ((w2 == 0) & (c > 0)).any(axis=0) & (u_total > 0)
         reduce(w2, 0, out=put["w2"])
         w2_f = (f1 + u_total) * c_f
         k2 = s1 * c_f
         k2 += np.multiply(f1, c, out=d)
         inverse = np.add(w2, w2_f, out=d)
+        _below(inverse, near)
         np.divide(1.0, inverse, out=inverse)
         np.einsum("ij,ij->j", k2, inverse, out=put["f2"])                 # Σ k_iF / (w_i + w_F)
         np.einsum("ij,ij,ij->j", k2, w2, inverse, out=put["g2"])          # Σ k_iF w_i / (w_i + w_F)
@@ -1790,6 +1814,7 @@ class RRuleFusion(_Fusion):
             for key, values in (("sj", s), ("pj", p), ("cj", c), ("s1j", s1), ("w2j", w2)):
                 values.reshape(-1).take(flat, out=put[key], mode="clip")      # unbuffered: flat is valid
             h = np.add(w2, put["w2j"], out=inverse)
+            _below(h, near)
             np.divide(1.0, h, out=h)
             h.reshape(-1)[flat] = 0.0
             np.einsum("ij,ij->j", c, h, out=put["ch"])

@@ -9,12 +9,14 @@ values and the exceptions must agree (SPEC A.3, A.4, A.5, Part D).
 import math
 import pickle
 from dataclasses import replace
+from fractions import Fraction
 
 import numpy as np
 import pytest
 from hypothesis import event, given, settings, target
 from hypothesis import strategies as st
 
+import belief.bayesian as bayesian_module
 import belief.rules as rules_module
 from belief import (
     ENGINES,
@@ -82,6 +84,19 @@ def tiny(rng, rows, n):
     m = rng.dirichlet(np.ones(n), size=rows)
     small = rng.random(m.shape) < 0.5
     m[small] = 10.0 ** rng.uniform(-320, -150, size=int(small.sum()))
+    return m / m.sum(axis=1, keepdims=True)
+
+
+def peaked(rng, rows, n):
+    """What a particle's cue gives many targets: a few ordinary masses, the rest 1e-320 to 1e-20 or exactly 0.
+
+    The last column (FA in the tracking models) always keeps an ordinary mass.
+    """
+    m = 10.0 ** rng.uniform(-320, -20, size=(rows, n))
+    m[rng.random(m.shape) < 0.3] = 0.0
+    for row in m:
+        row[rng.choice(n, size=int(rng.integers(1, 3)), replace=False)] = rng.random(1) + 0.1
+    m[:, -1] = rng.uniform(0.05, 0.5, size=rows)
     return m / m.sum(axis=1, keepdims=True)
 
 
@@ -213,7 +228,7 @@ def check(model, rule, options, arrays, broadcast, rng, shuffle=False):
 
 
 @st.composite
-def cases(draw, kinds=("dense", "sparse", "conflict", "tiny")):
+def cases(draw, kinds=("dense", "sparse", "conflict", "tiny", "peaked")):
     name, model = draw(st.sampled_from(MODELS))
     rule, options = draw(st.sampled_from(RULE_OPTIONS))
     sources = draw(st.integers(2, 4))
@@ -238,7 +253,7 @@ def arrays_of(rng, model, sources, rows, kind):
     n = len(model.frame)
     if kind == "conflict" and exclusive_split(model).exclusive:
         return near_conflict(rng, rows, model, sources)
-    maker = {"dense": dense, "tiny": tiny}.get(kind, sparse)
+    maker = {"dense": dense, "tiny": tiny, "peaked": peaked}.get(kind, sparse)
     return [maker(rng, rows, n) for _ in range(sources)]
 
 
@@ -293,6 +308,71 @@ def test_masses_that_underflow_in_products(rule, options):
         for sources in (2, 3):
             arrays = [tiny(rng, 40, tau + 1) for _ in range(sources)]
             check(model, rule, options, arrays, False, rng)
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+@pytest.mark.parametrize("rule, options", [(r, o) for r, o in RULE_OPTIONS if r == "r_rule"],
+                         ids=[f"{o['r_mode']}-{o['empty_mode']}" for r, o in RULE_OPTIONS if r == "r_rule"])
+def test_many_targets_with_peaked_cues(rule, options):
+    # The tracker's case: one cue spread over every target, the others peaked on one or two,
+    # with exact zeros and masses down to 1e-320 elsewhere, for up to 24 targets.
+    rng = np.random.default_rng(R_OPTIONS.index(options))
+    sizes = ((6, 4), (13, 3), (24, 3)) if options["r_mode"] != "jousselme" else ((6, 3), (13, 2), (24, 2))
+    for tau, most in sizes:            # Jousselme's R on the general path costs |focal|² per row
+        model = Model.for_targets(tau)
+        for sources in range(2, most + 1):
+            arrays = [dense(rng, 12, tau + 1)] + [peaked(rng, 12, tau + 1) for _ in range(sources - 1)]
+            check(model, rule, options, arrays, False, rng)
+
+
+def _exact_pair_shares(s, p, w):
+    """Σ_{l≠i} k_il w_i / (w_i + w_l), or σ_i / (σ_i + σ_l) where w_i + w_l = 0, in exact rationals."""
+    o, n = s.shape
+    out = np.zeros((o, n))
+    for col in range(n):
+        fs, fp, fw = ([Fraction(float(v)) for v in a[:, col]] for a in (s, p, w))
+        for i in range(o):
+            total = Fraction(0)
+            for j in range(o):
+                if j == i:
+                    continue
+                k = fs[i] * fp[j] + fs[j] * fp[i]
+                if fw[i] + fw[j] > 0:
+                    total += k * fw[i] / (fw[i] + fw[j])
+                elif fs[i] + fp[i] + fs[j] + fp[j] > 0:
+                    total += k * (fs[i] + fp[i]) / (fs[i] + fp[i] + fs[j] + fp[j])
+            out[i, col] = float(total)
+    return out
+
+
+@st.composite
+def pair_inputs(draw):
+    """(s, p, w) of up to 10 targets and 5 rows: ordinary, tiny (to 1e-320) and zero masses and weights."""
+    o, n = draw(st.integers(2, 10)), draw(st.integers(1, 5))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+
+    def masses():
+        scale = 10.0 ** rng.choice([0.0, -100.0, -200.0, -290.0, -305.0, -320.0], size=(o, n))
+        values = rng.random((o, n)) * scale
+        values[rng.random((o, n)) < draw(st.sampled_from([0.0, 0.3, 0.7]))] = 0.0
+        return values
+
+    s, p = masses(), masses()
+    w = s * p if draw(st.booleans()) else (s + masses()) * p          # a fresh state, or one with unions
+    return s, p, w
+
+
+@settings(max_examples=200, deadline=None)
+@given(inputs=pair_inputs())
+def test_pair_shares_are_exact(inputs):
+    # The one sum of the R-weighted fold that does not factorise, against exact rationals: the
+    # pairs whose weights sum below the floor, or to 0 (SPEC A.4's fallback), included.
+    s, p, w = inputs
+    with np.errstate(divide="raise", over="raise", invalid="raise"):
+        got = bayesian_module._pair_shares(s, p, w)
+    want = _exact_pair_shares(s, p, w)
+    # Relative to the value: products below 1e-300 lose digits to subnormal rounding on any path.
+    np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-300)
 
 
 @pytest.mark.filterwarnings("error::RuntimeWarning")
