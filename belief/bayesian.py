@@ -78,7 +78,7 @@ ENGINES = ("auto", "general", "bayesian")
 #: Rows × grid entries per block of the enumerations (a block's temporaries stay in cache).
 BLOCK_ENTRIES = 1 << 18
 #: Rows × |O| × |O| entries per block of the pairwise pass of the R-weighted rule.
-PAIR_BLOCK_ENTRIES = 1 << 18
+PAIR_BLOCK_ENTRIES = 1 << 19
 #: Rows per block of a fusion that reads the sources column by column (a column of a block stays
 #: below the size where the allocator maps fresh pages for every temporary).
 COLUMN_BLOCK_ROWS = 1 << 13
@@ -1452,18 +1452,26 @@ def _low_pairs(weights: np.ndarray, s: np.ndarray, p: np.ndarray, out: np.ndarra
     flat_b, kept_b, where_b = compact(with_p)
     x_a, x_b = gather(weights, flat_a, kept_a)[:, None], gather(weights, flat_b, kept_b)[None]
     s_a, p_b = gather(s, flat_a, kept_a), gather(p, flat_b, kept_b)
-    sigma_a = (s_a + gather(p, flat_a, kept_a))[:, None]
-    sigma_b = (p_b + gather(s, flat_b, kept_b))[None]
     term = s_a[:, None] * p_b[None]                                  # s_a p_b on the (a, b, row) grid
     term *= flat_a[:, None] != flat_b[None]                          # pairs of two targets
     total = x_a + x_b
-    weighed = total > 0
-    # 1 − D / floor where m0 weighs the pair (0 for D ≥ floor: _pair_sums was exact), 1 for the fallback.
-    term *= np.where(weighed, np.maximum(1.0 - total / _RECIPROCAL_FLOOR, 0.0), 1.0)
-    np.maximum(np.where(weighed, total, sigma_a + sigma_b), _TINY, out=total)
-    to_a = np.where(weighed, x_a, sigma_a) / total
+    if (((x_a[:, 0] == 0) & kept_a).any(axis=0) & ((x_b[0] == 0) & kept_b).any(axis=0)).any():
+        # Some pair may have no m0 weight (D = 0): the fallback share σ_a : σ_b there.
+        sigma_a = (s_a + gather(p, flat_a, kept_a))[:, None]
+        sigma_b = (p_b + gather(s, flat_b, kept_b))[None]
+        weighed = total > 0
+        term *= np.where(weighed, np.maximum(1.0 - total / _RECIPROCAL_FLOOR, 0.0), 1.0)
+        np.maximum(np.where(weighed, total, sigma_a + sigma_b), _TINY, out=total)
+        x_a, x_b = np.where(weighed, x_a, sigma_a), np.where(weighed, x_b, sigma_b)
+    else:
+        # 1 − D / floor: 0 for D ≥ floor, where _pair_sums was exact.
+        missing = total * (-1.0 / _RECIPROCAL_FLOOR)
+        missing += 1.0
+        term *= np.maximum(missing, 0.0, out=missing)
+        np.maximum(total, _TINY, out=total)                          # the padding's 0 / 0
+    to_a = np.divide(x_a, total)
     to_a *= term
-    to_b = np.where(weighed, x_b, sigma_b) / total
+    to_b = np.divide(x_b, total, out=total)
     to_b *= term
     for (hyp, column, place), extra in ((where_a, to_a.sum(axis=1)), (where_b, to_b.sum(axis=0))):
         out[hyp, column] += extra[place, column]
