@@ -50,6 +50,10 @@ CANDIDATES: dict[str, tuple[dict, str]] = {
                        "and nothing (every hypothesis alike) when born from the ground truth"),
     "full-size mask": ({"background": {"downscale": 1}}, "the background model at full resolution"),
     "duplicates 15": ({"initiation": {"duplicate_frames": 15}}, "duplicates end after 15 frames instead of 5"),
+    "overlap only": ({"initiation": {"appearance_weight": 0.0}},
+                     "detections assigned to tracks on overlap alone (appearance weight 0 instead of 0.75)"),
+    "appearance 0.5": ({"initiation": {"appearance_weight": 0.5}}, "appearance weight 0.5 instead of 0.75"),
+    "appearance 1": ({"initiation": {"appearance_weight": 1.0}}, "appearance weight 1 instead of 0.75"),
     "border births": ({"initiation": {"anywhere": False}}, "new tracks only at the image border (SPEC B.4)"),
 }
 

@@ -6,9 +6,12 @@ candidate may go to at most one track, and pairs that overlap less than a gate a
 matched.  Among all such matchings :func:`assign` takes the one that maximises the number
 of pairs plus their total overlap, k + Σ IoU: a linear assignment on the cost 1 − IoU (the
 Hungarian method, as in SORT, solved here by :func:`min_cost_assignment`).  One more pair above the
-gate is worth more than any gain of overlap, so as many tracks as can be are supported.  A
-track with no candidate is *unsupported* this frame, and a candidate that no track takes
-may start a new one.
+gate is worth more than any gain of overlap, so as many tracks as can be are supported.
+Given how much each candidate's window looks like each track (``likeness``), a pair scores
+IoU + w·ρ instead, as appearance-aware trackers (DeepSORT) weigh motion and appearance: of
+two people standing close together, whose tracks both overlap the one detection, the one it
+shows takes it.  A track with no candidate is *unsupported* this frame, and a candidate
+that no track takes may start a new one.
 """
 
 from __future__ import annotations
@@ -26,8 +29,8 @@ __all__ = ["assign", "min_cost_assignment", "UNASSIGNED"]
 UNASSIGNED = -1
 
 
-def assign(tracks, candidates, min_iou: float = 0.3) -> np.ndarray:
-    """The candidate of each track under the one-to-one matching of largest k + Σ IoU.
+def assign(tracks, candidates, min_iou: float = 0.3, likeness=None, appearance_weight: float = 0.0) -> np.ndarray:
+    """The candidate of each track under the one-to-one matching of largest k + Σ (IoU + w·ρ).
 
     Parameters
     ----------
@@ -37,6 +40,11 @@ def assign(tracks, candidates, min_iou: float = 0.3) -> np.ndarray:
         The candidate boxes ``x, y, w, h`` (a fifth column, a score, is ignored).
     min_iou : float in (0, 1]
         The gate: a pair that overlaps less is never matched.
+    likeness : array_like, shape (τ, n), optional
+        ρ in [0, 1], how much candidate k's window looks like track j (the Bhattacharyya
+        coefficient with its templates); without it the score is the overlap alone.
+    appearance_weight : float >= 0
+        w, the weight of ρ in a pair's score IoU + w·ρ (0: the overlap alone).
 
     Returns
     -------
@@ -46,7 +54,8 @@ def assign(tracks, candidates, min_iou: float = 0.3) -> np.ndarray:
     Raises
     ------
     TrackingError
-        Boxes that are not finite (n, 4) arrays with positive sizes, or a gate outside (0, 1].
+        Boxes that are not finite (n, 4) arrays with positive sizes, a gate outside (0, 1],
+        a likeness that is not a (τ, n) array of values in [0, 1], or a negative weight.
 
     Examples
     --------
@@ -59,6 +68,15 @@ def assign(tracks, candidates, min_iou: float = 0.3) -> np.ndarray:
     [1, -1]
     >>> assign(tracks, [[31, 1, 10, 20]]).tolist()
     [-1, 0]
+
+    Two tracks overlap one detection, the first a little more; the detection looks like the
+    second track's person, and with appearance it goes to that track:
+
+    >>> two = [[0, 0, 10, 20], [3, 0, 10, 20]]
+    >>> assign(two, [[1, 0, 10, 20]]).tolist()
+    [0, -1]
+    >>> assign(two, [[1, 0, 10, 20]], likeness=[[0.4], [0.9]], appearance_weight=0.75).tolist()
+    [-1, 0]
     """
     if isinstance(min_iou, bool) or not isinstance(min_iou, (int, float, np.integer, np.floating)) \
             or not 0 < min_iou <= 1:
@@ -67,15 +85,26 @@ def assign(tracks, candidates, min_iou: float = 0.3) -> np.ndarray:
     candidates = np.asarray(candidates, dtype=np.float64)
     candidates = check_boxes(candidates[:, :4] if candidates.ndim == 2 else candidates,
                              "candidate boxes").reshape(-1, 4)
+    if isinstance(appearance_weight, bool) or not isinstance(appearance_weight, (int, float, np.integer, np.floating)) \
+            or not 0 <= appearance_weight < math.inf:
+        raise TrackingError(f"appearance_weight must be a finite number >= 0, got {appearance_weight!r}")
+    if likeness is not None:
+        likeness = np.asarray(likeness, dtype=np.float64)
+        if likeness.shape != (len(tracks), len(candidates)) or not ((likeness >= 0) & (likeness <= 1)).all():
+            raise TrackingError(f"likeness must be a ({len(tracks)}, {len(candidates)}) array of values in [0, 1], "
+                                f"got shape {likeness.shape}")
     result = np.full(len(tracks), UNASSIGNED, dtype=np.intp)
     if len(tracks) == 0 or len(candidates) == 0:
         return result
     overlap = iou(tracks, candidates)
+    allowed = overlap >= min_iou
+    weight = float(appearance_weight) if likeness is not None else 0.0
+    score = overlap + weight * likeness if weight else overlap
     # Pairs below the gate cost more than any pair above it, so the solver never prefers
     # them; they are dropped after the solve.
-    cost = np.where(overlap >= min_iou, 1.0 - overlap, 2.0)
+    cost = np.where(allowed, (1.0 + weight) - score, 2.0 * (1.0 + weight))
     rows, cols = min_cost_assignment(cost)
-    kept = overlap[rows, cols] >= min_iou
+    kept = allowed[rows, cols]
     result[rows[kept]] = cols[kept]
     return result
 

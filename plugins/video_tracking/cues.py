@@ -32,7 +32,7 @@ C (16)) is the cue's own :meth:`ColourCue.follow_appearance`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from functools import lru_cache
 from typing import ClassVar, NamedTuple, Protocol, runtime_checkable
 
@@ -156,6 +156,12 @@ class Observation:
     def n_targets(self) -> int:
         """τ, the number of targets."""
         return self.centres.shape[0]
+
+    def with_assignment(self, assigned) -> "Observation":
+        """This observation with the frame's ``assigned`` detections, sharing the per-frame caches."""
+        out = replace(self, assigned=assigned)
+        object.__setattr__(out, "_bins", self._bins)
+        return out
 
     def colour_bins(self, bins: int) -> np.ndarray:
         """:func:`colour_bins` of the image, computed once per frame however many cues ask."""

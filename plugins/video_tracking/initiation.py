@@ -349,6 +349,23 @@ class InitiationConfig:
         The same weight for a detection (default 0.15): a detector's boxes jitter from frame
         to frame (on PETS, MOT15's public boxes are 1.07 to 1.69 times as wide as the
         person, 10th to 90th percentile), so they are averaged over more frames.
+    max_aspect : float
+        A detection gives a track at most this times its height as the width (default 0.5):
+        detectors often give one aspect ratio to everybody, with a margin of background
+        beside the person.
+    centre_gain : float
+        A track that takes a candidate moves its centre, particles and estimate alike, by
+        this times the candidate's score towards the candidate's centre (default 0.5).
+    appearance_weight : float
+        w, the weight of appearance in the assignment of *detections* to tracks (default
+        0.75; 0: overlap alone): a pair scores IoU + w·ρ, where ρ is the Bhattacharyya
+        coefficient between the track's templates and the window of the track's size at
+        the detection's centre (the smallest over the appearance cues, as for
+        ``appearance_support``).  Where two people stand close together, both of their
+        tracks overlap the one detection, and ρ gives it to the person it shows.  The gate
+        stays the overlap alone (``match_iou``).  Foreground blobs are assigned on overlap
+        alone: a blob may hold several people.  The default was chosen with
+        ``benchmarks/choose_defaults.py``.
     Raises
     ------
     TrackingError
@@ -385,6 +402,7 @@ class InitiationConfig:
     detection_size_smoothing: float = 0.15
     max_aspect: float = 0.5
     centre_gain: float = 0.5
+    appearance_weight: float = 0.75
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "border", _integer("border", self.border, 0))
@@ -416,6 +434,8 @@ class InitiationConfig:
         object.__setattr__(self, "max_aspect", checks.number("InitiationConfig.max_aspect", self.max_aspect,
                                                              positive=True))
         object.__setattr__(self, "centre_gain", _fraction("centre_gain", self.centre_gain, allow_zero=True))
+        object.__setattr__(self, "appearance_weight", checks.number("InitiationConfig.appearance_weight",
+                                                                    self.appearance_weight, minimum=0.0))
 
     def min_area_pixels(self, image_shape: tuple[int, int]) -> float:
         """The smallest blob area in pixels, ``min_area · W · H``, for an image of shape (H, W)."""

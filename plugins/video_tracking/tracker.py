@@ -305,14 +305,16 @@ class Tracker:
         estimates: list[Estimate] = []
         diagnostics = FrameDiagnostics(self.diagnostic_columns, (), np.zeros((0, len(self.diagnostic_columns))))
         if self.targets:
-            if candidates is not None:
-                assigned = assign(self.tracks.predicted_boxes(self.config.motion.dt), candidates, self._gate)
+            predicted = self.tracks.predicted_boxes(self.config.motion.dt) if candidates is not None else None
             previous = np.concatenate([t.particles.states[:, [CX, CY]] for t in self.targets])
             moved = self._predict()
             obs = Observation(image, foreground, centres=self._location_centres(),
                               sizes=np.array([t.size for t in self.targets]), previous_particles=previous,
-                              detections=candidates if self._reads_candidates else None,
-                              assigned=assigned if self._reads_candidates else None)
+                              detections=candidates if self._reads_candidates else None)
+            if candidates is not None:
+                assigned = self._assign(obs, predicted, candidates, detector)
+                if self._reads_candidates:
+                    obs = obs.with_assignment(assigned)
             evidence = self._score(obs, moved)
             weighing = self.weighting.weigh(evidence)
             weighted = self._estimate(moved, weighing, evidence)
@@ -334,6 +336,24 @@ class Tracker:
             diagnostics = FrameDiagnostics(diagnostics.columns, tuple(diagnostics.ids[k] for k in keep),
                                            diagnostics.values[keep])
         return FrameResult(frame, tuple(estimates), diagnostics, time.perf_counter() - started)
+
+    def _assign(self, obs: Observation, predicted: np.ndarray, candidates: np.ndarray, detector: bool) -> np.ndarray:
+        """The candidate each target takes (:func:`~belief_tracking.association.assign`), −1 for none.
+
+        Detections are weighed by appearance too (``InitiationConfig.appearance_weight``):
+        ρ of the window of each target's size at each detection's centre with the target's
+        templates.  Foreground blobs go by overlap alone.
+        """
+        initiation = self.config.initiation
+        weight = initiation.appearance_weight if initiation is not None else 0.0
+        if not (detector and weight > 0 and self._appearance_cues and len(candidates)):
+            return assign(predicted, candidates, self._gate)
+        tau, n = len(self.targets), len(candidates)
+        states = np.zeros((tau * n, len(self.targets[0].estimate)))
+        states[:, CX] = np.tile(candidates[:, 0] + candidates[:, 2] / 2.0, tau)
+        states[:, CY] = np.tile(candidates[:, 1] + candidates[:, 3] / 2.0, tau)
+        likeness = template_similarity(self._appearance_cues, obs, states, np.repeat(np.arange(tau), n))
+        return assign(predicted, candidates, self._gate, np.clip(likeness, 0.0, 1.0).reshape(tau, n), weight)
 
     def _likeness(self, obs: Observation) -> np.ndarray | None:
         """How much each target's window at its estimate still looks like its templates, shape (τ,).

@@ -90,12 +90,93 @@ def test_the_hungarian_solver_refuses_a_cost_it_cannot_solve():
         min_cost_assignment([1.0, 2.0])
 
 
+def brute_force_best_score(score: np.ndarray, allowed: np.ndarray) -> float:
+    """The largest k + Σ score of a one-to-one matching of k allowed pairs, by trying every injective map."""
+    best = 0.0
+    n, m = score.shape
+    for k in range(min(n, m) + 1):
+        for rows in itertools.combinations(range(n), k):
+            for cols in itertools.permutations(range(m), k):
+                if allowed[list(rows), list(cols)].all():
+                    best = max(best, k + float(score[list(rows), list(cols)].sum()))
+    return best
+
+
+@settings(max_examples=60, deadline=None)
+@given(boxes, boxes, st.sampled_from([0.1, 0.3]), st.sampled_from([0.25, 0.75, 2.0]), st.integers(0, 2**32 - 1))
+def test_with_appearance_the_assignment_has_the_most_pairs_and_score(tracks, candidates, gate, weight, seed):
+    # Each pair scores IoU + w·ρ; the gate is on the overlap alone; as many pairs as can be.
+    tracks = np.array(tracks, dtype=float).reshape(-1, 4)
+    candidates = np.array(candidates, dtype=float).reshape(-1, 4)
+    likeness = np.random.default_rng(seed).random((len(tracks), len(candidates)))
+    taken = assign(tracks, candidates, gate, likeness, weight)
+    chosen = taken[taken != UNASSIGNED]
+    assert len(set(chosen.tolist())) == len(chosen)
+    overlap = iou(tracks, candidates)
+    score = (overlap + weight * likeness) / (1.0 + weight)        # in [0, 1], as the overlap alone is
+    total = sum(1.0 + score[j, k] for j, k in enumerate(taken) if k != UNASSIGNED)
+    assert all(overlap[j, k] >= gate for j, k in enumerate(taken) if k != UNASSIGNED)
+    assert total == pytest.approx(brute_force_best_score(score, overlap >= gate), abs=1e-9)
+
+
+def test_appearance_gives_a_shared_detection_to_the_person_it_shows():
+    two = [[0, 0, 10, 20], [3, 0, 10, 20]]
+    detection = [[1, 0, 10, 20]]                                    # overlaps the first track more
+    assert assign(two, detection).tolist() == [0, UNASSIGNED]
+    assert assign(two, detection, likeness=[[0.3], [0.9]], appearance_weight=0.75).tolist() == [UNASSIGNED, 0]
+    assert assign(two, detection, likeness=[[0.3], [0.9]], appearance_weight=0.0).tolist() == [0, UNASSIGNED]
+    # The gate stays the overlap: a detection that looks like a track but barely overlaps it is not taken.
+    assert assign([[0, 0, 10, 20]], [[9, 0, 10, 20]], likeness=[[1.0]], appearance_weight=5.0).tolist() == [-1]
+
+
+def test_the_tracker_weighs_each_detection_by_how_much_it_looks_like_each_track(monkeypatch):
+    # Two people far apart, red and blue: the likeness the tracker hands to the assignment
+    # is high for each person's own detection and low for the other's, whatever their order.
+    import belief_tracking.tracker as tracker_module
+
+    image = np.full((100, 120, 3), 128, np.uint8)
+    image[20:50, 20:30] = (0, 0, 255)
+    image[20:50, 80:90] = (255, 0, 0)
+    red, blue = [19.0, 19.0, 12.0, 32.0, 1.0], [79.0, 19.0, 12.0, 32.0, 1.0]
+    seen = []
+
+    def spy(tracks, candidates, min_iou=0.3, likeness=None, appearance_weight=0.0):
+        seen.append((None if likeness is None else np.array(likeness), appearance_weight))
+        return assign(tracks, candidates, min_iou, likeness, appearance_weight)
+
+    monkeypatch.setattr(tracker_module, "assign", spy)
+    config = TrackerConfig(particles=20, cues=("colour", "location"), initiation=InitiationConfig())
+    tracker = Tracker(config, None, np.random.default_rng(0))
+    tracker.step(1, image, np.array([red, blue]))
+    assert [round(t.estimate[0]) for t in tracker.targets] == [25, 85]
+    tracker.step(2, image, np.array([blue, red]))
+    likeness, weight = seen[-1]
+    assert weight == InitiationConfig().appearance_weight > 0
+    assert likeness.shape == (2, 2)
+    assert likeness[0, 1] > 0.9 and likeness[1, 0] > 0.9           # each track's own person
+    assert likeness[0, 0] < 0.5 and likeness[1, 1] < 0.5           # the other one
+    # With the weight 0 the assignment goes by overlap alone, and no likeness is formed.
+    blobs = Tracker(TrackerConfig(particles=20, cues=("colour", "location"),
+                                  initiation=InitiationConfig(appearance_weight=0.0)), None, np.random.default_rng(0))
+    blobs.step(1, image, np.array([red, blue]))
+    blobs.step(2, image, np.array([blue, red]))
+    assert seen[-1][0] is None
+
+
 def test_bad_assignment_inputs_are_refused():
     with pytest.raises(TrackingError, match="min_iou"):
         assign([[0, 0, 1, 1]], [[0, 0, 1, 1]], min_iou=0)
     with pytest.raises(TrackingError, match="candidate boxes"):
         assign([[0, 0, 1, 1]], [[0, 0, -1, 1]])
     assert assign(np.zeros((0, 4)), [[0, 0, 1, 1, 0.5]]).shape == (0,)
+    with pytest.raises(TrackingError, match="likeness must be a \\(1, 1\\) array"):
+        assign([[0, 0, 1, 1]], [[0, 0, 1, 1]], likeness=[[0.5, 0.5]], appearance_weight=1.0)
+    with pytest.raises(TrackingError, match="likeness must be"):
+        assign([[0, 0, 1, 1]], [[0, 0, 1, 1]], likeness=[[np.nan]], appearance_weight=1.0)
+    with pytest.raises(TrackingError, match="appearance_weight must be a finite number >= 0"):
+        assign([[0, 0, 1, 1]], [[0, 0, 1, 1]], likeness=[[0.5]], appearance_weight=-1.0)
+    with pytest.raises(TrackingError, match="InitiationConfig.appearance_weight must be at least 0"):
+        InitiationConfig(appearance_weight=-0.5)
 
 
 # -- the lifecycle ----------------------------------------------------------------------------------
