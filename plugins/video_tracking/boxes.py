@@ -96,7 +96,7 @@ def intersections(boxes_a: np.ndarray, boxes_b: np.ndarray) -> np.ndarray:
     top = np.maximum(boxes_a[:, None, 1], boxes_b[None, :, 1])
     right = np.minimum(boxes_a[:, None, 0] + boxes_a[:, None, 2], boxes_b[None, :, 0] + boxes_b[None, :, 2])
     bottom = np.minimum(boxes_a[:, None, 1] + boxes_a[:, None, 3], boxes_b[None, :, 1] + boxes_b[None, :, 3])
-    return np.clip(right - left, 0, None) * np.clip(bottom - top, 0, None)
+    return np.maximum(right - left, 0.0) * np.maximum(bottom - top, 0.0)
 
 
 def iou(boxes_a, boxes_b) -> np.ndarray:

@@ -730,8 +730,10 @@ def _sample(centres: np.ndarray, box_sizes: np.ndarray, samples: tuple[int, int]
     ys = centres[:, 1] + v[:, None] * half[:, 1]                                   # (down, n)
     # Truncating a coordinate clipped to [0, W − 1] gives the same pixel as clipping ⌊x⌋,
     # without a floor pass.
-    columns = np.clip(xs, 0, width - 1).astype(np.intp)
-    rows = np.clip(ys, 0, height - 1).astype(np.intp)
+    clipped = np.maximum(xs, 0.0)
+    columns = np.minimum(clipped, width - 1.0, out=clipped).astype(np.intp)
+    clipped = np.maximum(ys, 0.0)
+    rows = np.minimum(clipped, height - 1.0, out=clipped).astype(np.intp)
     rows *= width
     pixels = np.take(rows, down_index, axis=0)                                     # (S, n)
     pixels += np.take(columns, across_index, axis=0)

@@ -278,8 +278,9 @@ class ConstantVelocity:
         moved[:, CX:CY + 1] += states[:, VX:VY + 1] * config.dt
         if self.bounds is not None:
             width, height = self.bounds
-            np.clip(moved[:, CX], 0.0, width - 1.0, out=moved[:, CX])
-            np.clip(moved[:, CY], 0.0, height - 1.0, out=moved[:, CY])
+            for column, top in ((CX, width - 1.0), (CY, height - 1.0)):
+                values = moved[:, column]
+                np.minimum(np.maximum(values, 0.0, out=values), top, out=values)
         return moved
 
 

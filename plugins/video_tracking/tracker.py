@@ -41,6 +41,7 @@ from belief_tracking.appearance import AppearanceFollower
 from belief_tracking.association import assign
 from belief_tracking.background import BackgroundModel
 from belief_tracking.blobs import box_mask
+from belief_tracking.boxes import iou
 from belief_tracking.candidates import BlobCandidates
 from belief_tracking.config import TrackerConfig
 from belief_tracking.cues import CUES, AppearanceCue, Observation, score_cues, template_similarity
@@ -342,18 +343,24 @@ class Tracker:
 
         Detections are weighed by appearance too (``InitiationConfig.appearance_weight``):
         ρ of the window of each target's size at each detection's centre with the target's
-        templates.  Foreground blobs go by overlap alone.
+        templates, formed for the pairs within the overlap gate only, and only where some
+        target or detection has more than one such pair (elsewhere the matching is fixed
+        whatever the scores).  Foreground blobs go by overlap alone.
         """
         initiation = self.config.initiation
         weight = initiation.appearance_weight if initiation is not None else 0.0
         if not (detector and weight > 0 and self._appearance_cues and len(candidates)):
             return assign(predicted, candidates, self._gate)
-        tau, n = len(self.targets), len(candidates)
-        states = np.zeros((tau * n, len(self.targets[0].estimate)))
-        states[:, CX] = np.tile(candidates[:, 0] + candidates[:, 2] / 2.0, tau)
-        states[:, CY] = np.tile(candidates[:, 1] + candidates[:, 3] / 2.0, tau)
-        likeness = template_similarity(self._appearance_cues, obs, states, np.repeat(np.arange(tau), n))
-        return assign(predicted, candidates, self._gate, np.clip(likeness, 0.0, 1.0).reshape(tau, n), weight)
+        within = iou(predicted, candidates[:, :4]) >= self._gate
+        if (within.sum(axis=0) <= 1).all() and (within.sum(axis=1) <= 1).all():
+            return assign(predicted, candidates, self._gate)
+        rows, cols = np.nonzero(within)
+        states = np.zeros((rows.size, len(self.targets[0].estimate)))
+        states[:, CX] = candidates[cols, 0] + candidates[cols, 2] / 2.0
+        states[:, CY] = candidates[cols, 1] + candidates[cols, 3] / 2.0
+        likeness = np.zeros(within.shape)
+        likeness[rows, cols] = np.clip(template_similarity(self._appearance_cues, obs, states, rows), 0.0, 1.0)
+        return assign(predicted, candidates, self._gate, likeness, weight)
 
     def _likeness(self, obs: Observation) -> np.ndarray | None:
         """How much each target's window at its estimate still looks like its templates, shape (τ,).

@@ -91,7 +91,7 @@ class Target:
     def box(self, state: np.ndarray | None = None) -> tuple[float, float, float, float]:
         """The window ``x, y, w, h`` of ``state`` (default: the estimate), in 0-based pixels."""
         state = self.estimate if state is None else state
-        w, h = self.size * math.exp(float(np.clip(state[LOG_SCALE], -30.0, 30.0)))
+        w, h = self.size * math.exp(min(max(float(state[LOG_SCALE]), -30.0), 30.0))
         return (float(state[CX] - w / 2.0), float(state[CY] - h / 2.0), float(w), float(h))
 
 
