@@ -2,7 +2,7 @@
 
 Run from the repository root::
 
-    python benchmarks/choose_defaults.py                       # every candidate, seeds 0-4 (about 25 min on 2 cores)
+    python benchmarks/choose_defaults.py                       # every candidate, seeds 0-4 (about 10 min on 2 cores)
     python benchmarks/choose_defaults.py --candidates default pcr6 --seeds 0 1
     python benchmarks/choose_defaults.py --jobs 1              # one process (default: one per core)
     python benchmarks/choose_defaults.py --data DIR            # another copy of the PETS sequence
