@@ -133,6 +133,7 @@ class Lifecycle:
         likeness : ndarray, shape (τ,), optional
             How much each track's window looks like its appearance templates (the
             Bhattacharyya coefficient ρ); ρ ≥ ``appearance_support`` supports the track.
+            NaN for a track that took a candidate: the candidate supports it.
 
         Returns
         -------

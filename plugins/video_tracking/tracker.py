@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from belief_tracking.appearance import AppearanceFollower
-from belief_tracking.association import assign
+from belief_tracking.association import UNASSIGNED, assign
 from belief_tracking.background import BackgroundModel
 from belief_tracking.blobs import box_mask
 from belief_tracking.boxes import iou
@@ -324,7 +324,7 @@ class Tracker:
             if assigned is not None:
                 self.tracks.follow_candidates(frame, assigned, candidates, detector)
             if self.tracks.lifecycle is not None and self.config.initiation.appearance_support is not None:
-                likeness = self._likeness(obs)
+                likeness = self._likeness(obs, assigned)
             estimates = [Estimate(frame, t.id, t.estimate.copy(), t.box()) for t in self.targets]
             diagnostics = FrameDiagnostics(self.diagnostic_columns, tuple(t.id for t in self.targets),
                                            np.column_stack([records[c] for c in self.diagnostic_columns]))
@@ -362,16 +362,21 @@ class Tracker:
         likeness[rows, cols] = np.clip(template_similarity(self._appearance_cues, obs, states, rows), 0.0, 1.0)
         return assign(predicted, candidates, self._gate, likeness, weight)
 
-    def _likeness(self, obs: Observation) -> np.ndarray | None:
+    def _likeness(self, obs: Observation, assigned: np.ndarray | None) -> np.ndarray | None:
         """How much each target's window at its estimate still looks like its templates, shape (τ,).
 
         The smallest Bhattacharyya coefficient ρ (L (12)) over the appearance cues; None
-        without an appearance cue.
+        without an appearance cue.  Only a target that took no candidate needs it (a
+        candidate supports the others): the others get NaN.
         """
         if not self._appearance_cues:
             return None
-        states = np.array([t.estimate for t in self.targets])
-        return template_similarity(self._appearance_cues, obs, states, np.arange(len(states)))
+        needed = np.arange(len(self.targets)) if assigned is None else np.flatnonzero(assigned == UNASSIGNED)
+        likeness = np.full(len(self.targets), np.nan)
+        if needed.size:
+            states = np.array([self.targets[k].estimate for k in needed])
+            likeness[needed] = template_similarity(self._appearance_cues, obs, states, needed)
+        return likeness
 
     def _candidates(self, detections: np.ndarray | None, foreground: np.ndarray | None) -> np.ndarray | None:
         """The frame's candidate boxes ``x, y, w, h, score``: the detections, else the foreground's person blobs."""

@@ -223,7 +223,8 @@ class TrackManager:
             False when this frame's candidates must not start tracks (a lighting change).
         likeness : ndarray, shape (τ,), optional
             How much each target's window still looks like its templates (Bhattacharyya
-            coefficient): at least ``appearance_support`` supports the target.
+            coefficient): at least ``appearance_support`` supports the target; NaN for a
+            target that took a candidate.
 
         Returns
         -------
