@@ -20,10 +20,11 @@ import math
 
 import numpy as np
 
+from belief_tracking import checks
 from belief_tracking.boxes import check_boxes, iou
 from belief_tracking.errors import TrackingError
 
-__all__ = ["assign", "min_cost_assignment", "UNASSIGNED"]
+__all__ = ["assign", "contested_pairs", "min_cost_assignment", "UNASSIGNED"]
 
 #: The assignment of a track that takes no candidate.
 UNASSIGNED = -1
@@ -85,9 +86,7 @@ def assign(tracks, candidates, min_iou: float = 0.3, likeness=None, appearance_w
     candidates = np.asarray(candidates, dtype=np.float64)
     candidates = check_boxes(candidates[:, :4] if candidates.ndim == 2 else candidates,
                              "candidate boxes").reshape(-1, 4)
-    if isinstance(appearance_weight, bool) or not isinstance(appearance_weight, (int, float, np.integer, np.floating)) \
-            or not 0 <= appearance_weight < math.inf:
-        raise TrackingError(f"appearance_weight must be a finite number >= 0, got {appearance_weight!r}")
+    appearance_weight = checks.number("appearance_weight", appearance_weight, minimum=0.0)
     if likeness is not None:
         likeness = np.asarray(likeness, dtype=np.float64)
         if likeness.shape != (len(tracks), len(candidates)) or not ((likeness >= 0) & (likeness <= 1)).all():
@@ -107,6 +106,37 @@ def assign(tracks, candidates, min_iou: float = 0.3, likeness=None, appearance_w
     kept = allowed[rows, cols]
     result[rows[kept]] = cols[kept]
     return result
+
+
+def contested_pairs(tracks, candidates, min_iou: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
+    """The (track, candidate) pairs within the gate where the scores can change :func:`assign`'s matching.
+
+    Where no track has two candidates within the gate and no candidate two tracks, every
+    such pair is matched whatever its score, so a likeness is needed nowhere and both
+    arrays are empty; otherwise every pair within the gate is returned.
+
+    Parameters
+    ----------
+    tracks : ndarray, shape (τ, 4)
+    candidates : ndarray, shape (n, 4) or (n, 5)
+    min_iou : float in (0, 1]
+
+    Returns
+    -------
+    rows, cols : ndarray of int
+        Track and candidate of each pair.
+
+    Examples
+    --------
+    >>> contested_pairs(np.array([[0, 0, 10, 20], [3, 0, 10, 20]]), np.array([[1, 0, 10, 20]]))
+    (array([0, 1]), array([0, 0]))
+    >>> contested_pairs(np.array([[0, 0, 10, 20]]), np.array([[1, 0, 10, 20], [50, 0, 10, 20]]))
+    (array([], dtype=int64), array([], dtype=int64))
+    """
+    within = iou(tracks, np.asarray(candidates)[:, :4]) >= min_iou
+    if (within.sum(axis=0) <= 1).all() and (within.sum(axis=1) <= 1).all():
+        return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
+    return np.nonzero(within)
 
 
 def min_cost_assignment(cost) -> tuple[np.ndarray, np.ndarray]:

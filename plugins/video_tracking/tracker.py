@@ -38,10 +38,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from belief_tracking.appearance import AppearanceFollower
-from belief_tracking.association import UNASSIGNED, assign
+from belief_tracking.association import UNASSIGNED, assign, contested_pairs
 from belief_tracking.background import BackgroundModel
 from belief_tracking.blobs import box_mask
-from belief_tracking.boxes import iou
 from belief_tracking.candidates import BlobCandidates
 from belief_tracking.config import TrackerConfig
 from belief_tracking.cues import CUES, AppearanceCue, Observation, score_cues, template_similarity
@@ -343,22 +342,20 @@ class Tracker:
 
         Detections are weighed by appearance too (``InitiationConfig.appearance_weight``):
         ρ of the window of each target's size at each detection's centre with the target's
-        templates, formed for the pairs within the overlap gate only, and only where some
-        target or detection has more than one such pair (elsewhere the matching is fixed
-        whatever the scores).  Foreground blobs go by overlap alone.
+        templates, formed only for :func:`~belief_tracking.association.contested_pairs`.
+        Foreground blobs go by overlap alone.
         """
         initiation = self.config.initiation
         weight = initiation.appearance_weight if initiation is not None else 0.0
         if not (detector and weight > 0 and self._appearance_cues and len(candidates)):
             return assign(predicted, candidates, self._gate)
-        within = iou(predicted, candidates[:, :4]) >= self._gate
-        if (within.sum(axis=0) <= 1).all() and (within.sum(axis=1) <= 1).all():
+        rows, cols = contested_pairs(predicted, candidates, self._gate)
+        if not rows.size:
             return assign(predicted, candidates, self._gate)
-        rows, cols = np.nonzero(within)
         states = np.zeros((rows.size, len(self.targets[0].estimate)))
         states[:, CX] = candidates[cols, 0] + candidates[cols, 2] / 2.0
         states[:, CY] = candidates[cols, 1] + candidates[cols, 3] / 2.0
-        likeness = np.zeros(within.shape)
+        likeness = np.zeros((len(predicted), len(candidates)))
         likeness[rows, cols] = np.clip(template_similarity(self._appearance_cues, obs, states, rows), 0.0, 1.0)
         return assign(predicted, candidates, self._gate, likeness, weight)
 

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from belief_tracking import scenes
-from belief_tracking.association import UNASSIGNED, assign, min_cost_assignment
+from belief_tracking.association import UNASSIGNED, assign, contested_pairs, min_cost_assignment
 from belief_tracking.boxes import iou
 from belief_tracking.config import TrackerConfig
 from belief_tracking.cues import DetectionConfig, DetectionCue, Observation
@@ -119,6 +119,22 @@ def test_with_appearance_the_assignment_has_the_most_pairs_and_score(tracks, can
     assert total == pytest.approx(brute_force_best_score(score, overlap >= gate), abs=1e-9)
 
 
+@settings(max_examples=80, deadline=None)
+@given(boxes, boxes, st.sampled_from([0.1, 0.3]), st.integers(0, 2**32 - 1))
+def test_the_likeness_of_uncontested_pairs_never_changes_the_matching(tracks, candidates, gate, seed):
+    # The tracker forms ρ only for the contested pairs; the matching must be the one of the full likeness.
+    tracks = np.array(tracks, dtype=float).reshape(-1, 4)
+    candidates = np.array(candidates, dtype=float).reshape(-1, 4)
+    likeness = np.random.default_rng(seed).random((len(tracks), len(candidates)))
+    rows, cols = contested_pairs(tracks, candidates, gate)
+    within = iou(tracks, candidates) >= gate
+    assert not rows.size or within[rows, cols].all() and len(rows) == within.sum()
+    partial = np.zeros_like(likeness)
+    partial[rows, cols] = likeness[rows, cols]
+    assert assign(tracks, candidates, gate, partial, 0.75).tolist() == \
+        assign(tracks, candidates, gate, likeness, 0.75).tolist()
+
+
 def test_appearance_gives_a_shared_detection_to_the_person_it_shows():
     two = [[0, 0, 10, 20], [3, 0, 10, 20]]
     detection = [[1, 0, 10, 20]]                                    # overlaps the first track more
@@ -184,7 +200,7 @@ def test_bad_assignment_inputs_are_refused():
         assign([[0, 0, 1, 1]], [[0, 0, 1, 1]], likeness=[[0.5, 0.5]], appearance_weight=1.0)
     with pytest.raises(TrackingError, match="likeness must be"):
         assign([[0, 0, 1, 1]], [[0, 0, 1, 1]], likeness=[[np.nan]], appearance_weight=1.0)
-    with pytest.raises(TrackingError, match="appearance_weight must be a finite number >= 0"):
+    with pytest.raises(TrackingError, match="appearance_weight must be at least 0"):
         assign([[0, 0, 1, 1]], [[0, 0, 1, 1]], likeness=[[0.5]], appearance_weight=-1.0)
     with pytest.raises(TrackingError, match="InitiationConfig.appearance_weight must be at least 0"):
         InitiationConfig(appearance_weight=-0.5)
