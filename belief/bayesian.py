@@ -1019,11 +1019,12 @@ class _Fold:
     fold starts from a Bayesian source) are skipped.
     """
 
-    def __init__(self, state: _RState, p: np.ndarray, p_f: np.ndarray, r: np.ndarray, union: bool) -> None:
+    def __init__(self, state: _RState, p: np.ndarray, p_f: np.ndarray, r: tuple[np.ndarray, np.ndarray],
+                 union: bool) -> None:
         s, f = state.s, state.f
-        self.state, self.p, self.p_f, self.r, self.union = state, p, p_f, r, union
+        self.r, self.rho = r                                   # R and 1 − R (_state_inconsistency)
+        self.state, self.p, self.p_f, self.union = state, p, p_f, union
         self._totals: dict | None = None
-        self.rho = 1.0 - r
         self.t = np.add.reduce(p, 0)
         self.s_total = np.add.reduce(s, 0)
         fresh = state.fresh
@@ -1479,12 +1480,16 @@ def _low_pairs(weights: np.ndarray, s: np.ndarray, p: np.ndarray, out: np.ndarra
 
 
 def _state_inconsistency(state: _RState, p: np.ndarray, p_f: np.ndarray, r_mode: str,
-                         split: ExclusiveSplit) -> np.ndarray:
-    """R (W (10)) between a running result and a Bayesian cue, from the element classes; shape (N,)."""
+                         split: ExclusiveSplit) -> tuple[np.ndarray, np.ndarray]:
+    """R (W (10)) between a running result and a Bayesian cue, and 1 − R, from the element classes; shape (N,)."""
+    if r_mode == "paper":
+        # The cue has mass on singletons only, so they alone overlap the running result.
+        overlap = np.add.reduce(np.minimum(state.s, p), 0)
+        overlap += np.minimum(state.f, p_f)
     d = state.s - p
     d_f = state.f - p_f
     if r_mode == "paper":
-        # Σ_A |Δ(A)|: the cue has mass on singletons only, so the other elements count fully.
+        # Σ_A |Δ(A)|: the other elements count fully.
         value = np.add.reduce(np.abs(d, out=d), 0)
         value += np.abs(d_f, out=d_f)
         if not state.fresh:
@@ -1494,14 +1499,8 @@ def _state_inconsistency(state: _RState, p: np.ndarray, p_f: np.ndarray, r_mode:
             value += state.v
             value += state.e
         value *= 0.5
-        # Disjoint focal sets give exactly R = 1, as belief.rules sets it.  Only rows whose sum
-        # is about 1 can be disjoint (each source sums to 1), so only they are checked.
-        near = np.flatnonzero(value >= 1.0 - 1e-6)
-        if near.size:
-            overlap = ((np.minimum(state.s[:, near], p[:, near]) > 0).any(axis=0)
-                       | (np.minimum(state.f[near], p_f[near]) > 0))
-            value[near[~overlap]] = 1.0
-    elif r_mode == "euclid":
+        return paper_inconsistency(value, overlap)
+    if r_mode == "euclid":
         value = (d * d).sum(axis=0) + d_f * d_f
         if not state.fresh:
             value += state.q_squares + (state.u * state.u).sum(axis=0) + state.v * state.v + state.e * state.e
@@ -1510,7 +1509,8 @@ def _state_inconsistency(state: _RState, p: np.ndarray, p_f: np.ndarray, r_mode:
         value = 0.5 * _jousselme_form(state, d, d_f, split)
     np.maximum(value, 0.0, out=value)
     np.minimum(value, 1.0, out=value)
-    return np.sqrt(value, out=value)
+    r = np.sqrt(value, out=value)
+    return r, 1.0 - r
 
 
 def _jousselme_form(state: _RState, d: np.ndarray, d_f: np.ndarray, split: ExclusiveSplit) -> np.ndarray:
@@ -1580,21 +1580,56 @@ def bayesian_inconsistency(m1: np.ndarray, m2: np.ndarray, split: ExclusiveSplit
 
 
 def aligned_inconsistency(m1: np.ndarray, m2: np.ndarray, r_mode: str,
-                          jousselme: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+                          jousselme: Callable[[np.ndarray], np.ndarray],
+                          complement: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """R of W (10) between rows of two arrays aligned on the same focal elements, shape (N,).
 
     ``jousselme(delta)`` returns ½ ΔᵀDΔ for the rows of ``delta = m1 − m2``; it is called only
     when ``r_mode == "jousselme"``, so each caller supplies the form its columns allow.
+    With ``complement``, returns ``(R, 1 − R)``; for ``paper`` the second keeps its relative
+    precision when R is near 1 (:func:`paper_inconsistency`).
     """
     delta = m1 - m2
     if r_mode == "paper":
-        value = np.abs(delta).sum(axis=1) / 2.0
-        value[~(np.minimum(m1, m2) > 0).any(axis=1)] = 1.0
-    elif r_mode == "euclid":
+        return paper_inconsistency(np.abs(delta).sum(axis=1) / 2.0, np.minimum(m1, m2).sum(axis=1), complement)
+    if r_mode == "euclid":
         value = 0.5 * (delta * delta).sum(axis=1)
     else:
         value = jousselme(delta)
-    return np.sqrt(np.clip(value, 0.0, 1.0))
+    r = np.sqrt(np.clip(value, 0.0, 1.0))
+    return (r, 1.0 - r) if complement else r
+
+
+def paper_inconsistency(half_distance: np.ndarray, overlap: np.ndarray,
+                        complement: bool = True) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    """R of W (10) as printed, and 1 − R, from Σ_A |Δ(A)| / 2 and the overlap Σ_A min(m1(A), m2(A)).
+
+    For two mass functions that sum to 1, Σ |Δ| / 2 = 1 − Σ min(m1, m2).  Where the overlap is
+    below ½ (R above 0.71), R = sqrt(1 − overlap) and 1 − R = overlap / (1 + R): a sum of
+    non-negative terms, so 1 − R keeps its relative precision when the sources barely overlap.
+    Taken as 1 − sqrt(Σ|Δ|/2), it would be rounding noise of 1e-16 where the exact value is,
+    say, 1e-200, and the shares (1 − R)·k it sends to A, B and A ∪ B would be noise that the
+    next fold's m0 weights magnify.  Sources with no common focal element have overlap 0, so
+    R = 1 and 1 − R = 0 exactly (SPEC A.4).
+
+    Parameters
+    ----------
+    half_distance, overlap : ndarray, shape (N,)
+    complement : bool
+        Return ``(R, 1 − R)`` rather than R alone.
+
+    Examples
+    --------
+    >>> r, rho = paper_inconsistency(np.array([0.4, 1.0 - 1e-200]), np.array([0.6, 1e-200]))
+    >>> r.round(4), rho[1]
+    (array([0.6325, 1.    ]), np.float64(5e-201))
+    """
+    far = overlap < 0.5
+    r = np.sqrt(np.where(far, 1.0 - overlap, np.clip(half_distance, 0.0, 1.0)))
+    if not complement:
+        return r
+    rho = np.where(far, overlap / (1.0 + r), 1.0 - r)
+    return r, rho
 
 
 class RRuleFusion(_Fusion):
@@ -1673,7 +1708,7 @@ class RRuleFusion(_Fusion):
                 sp = before.s * p
                 sp2 = (sp * sp).sum(axis=0)
                 squares = ((before.s * before.s).sum(axis=0) * (p * p).sum(axis=0) - sp2 + sp.sum(axis=0) ** 2 - sp2)
-                state.q_squares = r * r * np.maximum(squares, 0.0)
+                state.q_squares = r[0] * r[0] * np.maximum(squares, 0.0)
             r = _state_inconsistency(state, *cues[index + 1], self.r_mode, self.split)
         fold = _Fold(state, *cues[-1], r, self.union)
         self._flagged[rows] |= fold.flagged
@@ -1723,8 +1758,8 @@ class RRuleFusion(_Fusion):
         so that every row gets the arithmetic of :class:`_Fold`.
         """
         n, union = self.rows, self.union
-        sums = {k: np.empty(n) for k in ("r1", "s0", "t1", "w1", "f1", "k1", "a2", "s1", "w2", "f2", "g2", "t2",
-                                         "f", "pf", "cf")}
+        sums = {k: np.empty(n) for k in ("r1", "s0", "t1", "w1", "f1", "k1", "a2", "o2", "s1", "w2", "f2", "g2",
+                                         "t2", "f", "pf", "cf")}
         if positions is not None:
             sums.update({k: np.empty(n) for k in ("sj", "pj", "cj", "s1j", "w2j", "ch", "sh")})
         slow = np.zeros(n, dtype=bool)
@@ -1759,14 +1794,16 @@ class RRuleFusion(_Fusion):
         put["f"][...], put["pf"][...], put["cf"][...] = f, p_f, c_f
         # R of W (10) between the first two cues, Σ_A |Δ(A)| / 2 over their singletons; a row whose
         # sum is about 1 may have disjoint focal sets, where R is 1 exactly: the general fold decides.
-        d = s - p
-        r1 = reduce(np.abs(d, out=d), 0, out=put["r1"])
-        r1 += np.abs(f - p_f)
-        r1 *= 0.5
-        near = r1 >= 1.0 - 1e-6
-        np.clip(r1, 0.0, 1.0, out=r1)
-        np.sqrt(r1, out=r1)
-        rho1 = 1.0 - r1
+        d = np.minimum(s, p)
+        overlap = reduce(d, 0)
+        overlap += np.minimum(f, p_f)
+        np.subtract(s, p, out=d)
+        half = reduce(np.abs(d, out=d), 0)
+        half += np.abs(f - p_f)
+        half *= 0.5
+        near = half >= 1.0 - 1e-6
+        r1, rho1 = paper_inconsistency(half, overlap)
+        put["r1"][...] = r1
         # First fold (its state is fresh): k_il of every pair to θ_i and θ_l as w_i : w_l, k_iF to
         # θ_i and F as w_i : w_F, R·k_iF to θ_i ∪ F (or ∅).
         w1 = np.multiply(s, p, out=d)
@@ -1793,6 +1830,7 @@ class RRuleFusion(_Fusion):
         k_total = np.multiply(s_total, p_f, out=put["k1"])  # Σ_i k_iF, a sum of non-negative terms
         k_total += f * t
         # Second fold: R needs Σ|m′(θ_i) − c_i|, m0 weighs w_i = (m′(θ_i) + m′(θ_i ∪ F)) c_i.
+        reduce(np.minimum(s1, c, out=d), 0, out=put["o2"])
         np.subtract(s1, c, out=d)
         reduce(np.abs(d, out=d), 0, out=put["a2"])
         if self.union:
@@ -1849,9 +1887,7 @@ class RRuleFusion(_Fusion):
         value += e1
         value *= 0.5
         near = value >= 1.0 - 1e-6
-        np.clip(value, 0.0, 1.0, out=value)
-        r = np.sqrt(value, out=value)
-        rho = 1.0 - r
+        r, rho = paper_inconsistency(value, sums["o2"] + np.minimum(f1, c_f))
         w_f = (f1 + u1) * c_f
         half = 0.5 * (w_f > 0)
         flagged = (q1 > 0) & (c_f > 0) & ~(w_f > 0)

@@ -1860,13 +1860,13 @@ def inconsistency(first, second, *aligned, r_mode: str = "paper") -> np.ndarray:
 
 
 def _aligned_inconsistency(m1: np.ndarray, m2: np.ndarray, focal: Sequence[Element], model: Model,
-                           r_mode: str = "paper") -> np.ndarray:
-    """R of W (10) between rows of two arrays aligned on ``focal``, shape (N,)."""
+                           r_mode: str = "paper", complement: bool = False):
+    """R of W (10) between rows of two arrays aligned on ``focal``, shape (N,); with ``complement``, (R, 1 − R)."""
     def jousselme(delta: np.ndarray) -> np.ndarray:
         matrix = _jousselme_matrix(model, tuple(focal))
         return 0.5 * np.einsum("na,ab,nb->n", delta, matrix, delta)
 
-    return bayesian.aligned_inconsistency(m1, m2, r_mode, jousselme)
+    return bayesian.aligned_inconsistency(m1, m2, r_mode, jousselme, complement)
 
 
 @lru_cache(maxsize=256)
@@ -1906,8 +1906,8 @@ def _r_pair_entries(rp: _RPlan, v1: np.ndarray, v2: np.ndarray, model: Model, r_
     if not n_pairs:
         return entries
     p1, p2 = _padded(v1), _padded(v2)
-    r = _aligned_inconsistency(np.take(p1, rp.aligned[0], axis=1), np.take(p2, rp.aligned[1], axis=1),
-                               rp.union_focal, model, r_mode)                            # W (10)
+    r, rho = _aligned_inconsistency(np.take(p1, rp.aligned[0], axis=1), np.take(p2, rp.aligned[1], axis=1),
+                                    rp.union_focal, model, r_mode, complement=True)      # W (10)
     k = np.add.reduceat(gather_product([v1, v2], rp.conflict), rp.pair_starts, axis=1)   # W (11)
     if len(rp.projection_starts):
         m0 = _padded(np.add.reduceat(gather_product([v1, v2], rp.projection), rp.projection_starts, axis=1))
@@ -1931,7 +1931,7 @@ def _r_pair_entries(rp: _RPlan, v1: np.ndarray, v2: np.ndarray, model: Model, r_
             sub_total = np.where(none, 1.0, sub_total)
         total[:, cols] = sub_total
     # (1 - R)·k·w/Σw, with the ratio taken first: w ≤ Σw, so a subnormal Σw cannot overflow k/Σw.
-    share = k * (1.0 - r)[:, None]
+    share = k * rho[:, None]
     entries[:, rp.pair_positions[0]] = r[:, None] * k                                    # W (14)
     for slot in range(3):
         entries[:, rp.pair_positions[slot + 1]] = share * (weights[slot] / total)        # W (12), (12′), (13)

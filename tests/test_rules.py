@@ -34,6 +34,7 @@ from tests.strategies import (
     mass_cases,
     mass_cases_under,
     minimal_regions,
+    tracking_allowed,
     weight_lists,
 )
 
@@ -734,6 +735,43 @@ def test_r_rule_disjoint_sources_have_r_exactly_one():
     result = combine(m1, m2, rule="r_rule")
     assert result["t1"] == result["t2"] == result["t3"] == 0.0
     assert math.fsum(result.values) == pytest.approx(1.0, abs=1e-15)
+
+
+NEARLY_DISJOINT = (   # t1, t2, t3, FA: each cue nearly certain where the one before is not
+    (4.8044063940795295e-001, 3.8299827079933405e-270, 5.1955936059204699e-001, 3.3715779997564867e-304),
+    (1.6734984019838230e-232, 6.3650048422790428e-001, 1.1584386602429696e-265, 3.6349951577209566e-001),
+    (0.415501505372766, 0.378822042699179, 0.1647159244402119, 0.04096052748784315),
+    (1.7193461102892705e-167, 1.1602698267435671e-002, 1.4222902966521806e-303, 9.8839730173256424e-001),
+)
+
+
+@pytest.mark.parametrize("engine", ["general", "auto"])
+def test_r_rule_of_nearly_disjoint_cues_keeps_one_minus_r_to_its_last_digits(engine):
+    # The first two cues overlap by about 2e-232, so 1 − R is about 1e-232.  Formed as
+    # 1 − √(Σ|Δ|/2), it would be the rounding of a sum near 2 (1e-16), which puts 1e-17 on t2
+    # after the second fold where the fold puts 1e-270; the fourth fold's m0 weights compare
+    # such masses and would then move 6e-6 of mass from t2 to t1.  The reference takes the
+    # cues normalised exactly, as fractions (SPEC A.4, W (10), (12)).
+    model = Model.for_targets(3)
+    case = ModelCase(model, tracking_allowed(4, 3), "tracking")
+    singletons = list(model.frame.singletons)
+    exact = []
+    for row in NEARLY_DISJOINT:
+        total = sum(Fraction(v) for v in row)
+        exact.append([(case.regions(e), Fraction(v) / total) for e, v in zip(singletons, row)])
+    expected = ref_r_fold(exact, case.allowed, "paper", "union")
+    fused = combine(*(MassBatch.bayesian(np.array(row), model=model) for row in NEARLY_DISJOINT), rule="r_rule",
+                    engine=engine)
+    # Each singleton's mass and belief, which the closed forms compute on their own.
+    for index, element in enumerate(singletons):
+        regions = case.regions(element)
+        mass = float(expected.get(regions, 0))
+        bel = float(sum((v for k, v in expected.items() if k and k <= regions), Fraction(0)))
+        assert fused.mass([element])[0, 0] == pytest.approx(mass, rel=1e-12, abs=1e-15), element
+        assert fused.bel([element])[0, 0] == pytest.approx(bel, rel=1e-12, abs=1e-15), element
+    assert fused.mass([singletons[0]])[0, 0] == pytest.approx(6.2912975101672e-06, rel=1e-12)
+    if engine == "general":
+        assert_matches(regions_result(fused[0], case), expected)
 
 
 # -- error paths ---------------------------------------------------------------------------------------------------
