@@ -1753,9 +1753,8 @@ class RRuleFusion(_Fusion):
         far from a target give it likelihoods of 1e-300, or 0): :func:`_low_pairs` gives them
         their exact shares.  Blocks of rows give only the sums over the targets that the
         second fold needs; its per-row formulas (R of W (10), the totals and the selected
-        target) then run once on whole columns.  The other rows, and rows whose R may be
-        exactly 1 (disjoint focal sets), are folded again by the general fold on their own,
-        so that every row gets the arithmetic of :class:`_Fold`.
+        target) then run once on whole columns.  The other rows are folded again by the
+        general fold on their own, so that every row gets the arithmetic of :class:`_Fold`.
         """
         n, union = self.rows, self.union
         sums = {k: np.empty(n) for k in ("r1", "s0", "t1", "w1", "f1", "k1", "a2", "o2", "s1", "w2", "f2", "g2",
@@ -1766,8 +1765,7 @@ class RRuleFusion(_Fusion):
         with np.errstate(all="ignore"):              # rows below the floor are redone by _Fold
             for rows in self.sources:
                 self._three_block(rows, None if positions is None else positions[rows], sums, slow)
-            totals, selected, flagged, near = self._three_rows(sums, positions)
-        slow |= near
+            totals, selected, flagged = self._three_rows(sums, positions)
         self._flagged |= flagged
         if slow.any():
             redo = np.flatnonzero(slow)
@@ -1792,8 +1790,8 @@ class RRuleFusion(_Fusion):
         put = {k: v[rows] for k, v in sums.items()}
         reduce = np.add.reduce
         put["f"][...], put["pf"][...], put["cf"][...] = f, p_f, c_f
-        # R of W (10) between the first two cues, Σ_A |Δ(A)| / 2 over their singletons; a row whose
-        # sum is about 1 may have disjoint focal sets, where R is 1 exactly: the general fold decides.
+        # R of W (10) between the first two cues, Σ_A |Δ(A)| / 2 over their singletons, and 1 − R
+        # from their overlap (exactly 0 for disjoint focal sets).
         d = np.minimum(s, p)
         overlap = reduce(d, 0)
         overlap += np.minimum(f, p_f)
@@ -1801,7 +1799,7 @@ class RRuleFusion(_Fusion):
         half = reduce(np.abs(d, out=d), 0)
         half += np.abs(f - p_f)
         half *= 0.5
-        near = half >= 1.0 - 1e-6
+        near = np.zeros(half.shape, dtype=bool)              # rows for the general fold
         r1, rho1 = paper_inconsistency(half, overlap)
         put["r1"][...] = r1
         # First fold (its state is fresh): k_il of every pair to θ_i and θ_l as w_i : w_l, k_iF to
@@ -1870,8 +1868,7 @@ class RRuleFusion(_Fusion):
     def _three_rows(self, sums: dict, positions: np.ndarray | None):
         """The per-row formulas of the second fold (:meth:`_Fold.totals`, :meth:`_Fold.selected`) on whole columns.
 
-        Returns the totals, the selected parts (or None), the flagged rows and the rows whose R
-        may be 1 exactly.
+        Returns the totals, the selected parts (or None) and the flagged rows.
         """
         union = self.union
         f0, p_f, c_f = sums["f"], sums["pf"], sums["cf"]
@@ -1886,7 +1883,6 @@ class RRuleFusion(_Fusion):
         value += u1
         value += e1
         value *= 0.5
-        near = value >= 1.0 - 1e-6
         r, rho = paper_inconsistency(value, sums["o2"] + np.minimum(f1, c_f))
         w_f = (f1 + u1) * c_f
         half = 0.5 * (w_f > 0)
@@ -1905,7 +1901,7 @@ class RRuleFusion(_Fusion):
                   "v": ((r if union else 0.0) + rho * half) * q_p_f,
                   "e": e1 * (t2 + c_f) if union else r_k + e1 * (t2 + c_f) + r * q_p_f}
         if positions is None:
-            return totals, None, flagged, near
+            return totals, None, flagged
         s_j, p_j, c_j = sums["sj"], sums["pj"], sums["cj"]
         s1j, w_j = sums["s1j"], sums["w2j"]
         q1j = sums["s0"] - s_j                              # Σ_{S∋J} m′(θ_S): the pairs θ_J ∩ θ_l
@@ -1936,7 +1932,7 @@ class RRuleFusion(_Fusion):
         to_single += w_j
         selected = {"s": to_single, "u": r * k_f if union else np.zeros(self.rows), "qj": qj,
                     "vj": ((r if union else 0.0) + rho * half) * c_f * q1j}
-        return totals, selected, flagged, near
+        return totals, selected, flagged
 
     @property
     def general_rows(self) -> np.ndarray:
