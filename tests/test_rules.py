@@ -774,6 +774,47 @@ def test_r_rule_of_nearly_disjoint_cues_keeps_one_minus_r_to_its_last_digits(eng
         assert_matches(regions_result(fused[0], case), expected)
 
 
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.tuples(st.floats(0, 1), st.floats(-300, 0), st.floats(0, 1), st.floats(-300, 0)),
+                min_size=2, max_size=6),
+       st.booleans())
+def test_paper_r_near_one_keeps_the_relative_precision_of_one_minus_r(columns, disjointish):
+    # R of W (10) as printed and 1 − R, for two rows that sum to one, against exact arithmetic on
+    # the same floats, √ taken to 800 digits.  Where the overlap Σ min(m1, m2) is below ½, 1 − R
+    # is formed from it, 1 − √(1 − overlap), and must keep 1e-13 of its own size, however small;
+    # elsewhere R is √(Σ|Δ|/2) of the floats as given, to 1e-13 of itself (SPEC A.4).
+    from decimal import Decimal, localcontext
+
+    from belief.bayesian import paper_inconsistency
+
+    m1 = np.array([a * 10.0 ** e for a, e, _, _ in columns])
+    m2 = np.array([b * 10.0 ** e for _, _, b, e in columns])
+    if disjointish:                       # each mass large in at most one of the rows
+        m1[1::2] *= 1e-200
+        m2[0::2] *= 1e-200
+    if not (m1.sum() > 0 and m2.sum() > 0):
+        return
+    m1, m2 = m1 / m1.sum(), m2 / m2.sum()
+    overlap = np.minimum(m1, m2).sum()
+    r, rho = paper_inconsistency(np.array([np.abs(m1 - m2).sum() / 2]), np.array([overlap]))
+    exact_overlap = sum((min(Fraction(a), Fraction(b)) for a, b in zip(m1, m2)), Fraction(0))
+    exact_half = sum((abs(Fraction(a) - Fraction(b)) for a, b in zip(m1, m2)), Fraction(0)) / 2
+
+    def root(q: Fraction) -> Decimal:
+        return (Decimal(q.numerator) / Decimal(q.denominator)).sqrt()
+
+    assert 0.0 <= r[0] <= 1.0 and 0.0 <= rho[0] <= 1.0
+    with localcontext() as context:
+        context.prec = 800                # 1 − √(1 − x) for x down to 1e-330, to 1e-13 of itself
+        if exact_overlap == 0:
+            assert r[0] == 1.0 and rho[0] == 0.0
+        elif overlap < 0.5:
+            assert rho[0] == pytest.approx(float(1 - root(1 - exact_overlap)), rel=1e-13, abs=0)
+        else:
+            assert r[0] == pytest.approx(float(root(exact_half)), rel=1e-13, abs=0)
+            assert r[0] + rho[0] == 1.0
+
+
 # -- error paths ---------------------------------------------------------------------------------------------------
 
 
