@@ -1019,10 +1019,10 @@ class _Fold:
     fold starts from a Bayesian source) are skipped.
     """
 
-    def __init__(self, state: _RState, p: np.ndarray, p_f: np.ndarray, r: tuple[np.ndarray, np.ndarray],
+    def __init__(self, state: _RState, p: np.ndarray, p_f: np.ndarray, r_rho: tuple[np.ndarray, np.ndarray],
                  union: bool) -> None:
         s, f = state.s, state.f
-        self.r, self.rho = r                                   # R and 1 − R (_state_inconsistency)
+        self.r, self.rho = r_rho                               # R and 1 − R (_state_inconsistency)
         self.state, self.p, self.p_f, self.union = state, p, p_f, union
         self._totals: dict | None = None
         self.t = np.add.reduce(p, 0)
@@ -1576,32 +1576,29 @@ def bayesian_inconsistency(m1: np.ndarray, m2: np.ndarray, split: ExclusiveSplit
         # disjoint singletons give exactly R = 1, as the general path does.
         return 0.5 * ((excl * excl).sum(axis=1) + squares + (free_sum * free_sum - squares) / 3.0)
 
-    return aligned_inconsistency(m1, m2, r_mode, jousselme)
+    return aligned_inconsistency(m1, m2, r_mode, jousselme)[0]
 
 
 def aligned_inconsistency(m1: np.ndarray, m2: np.ndarray, r_mode: str,
-                          jousselme: Callable[[np.ndarray], np.ndarray],
-                          complement: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
-    """R of W (10) between rows of two arrays aligned on the same focal elements, shape (N,).
+                          jousselme: Callable[[np.ndarray], np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """R of W (10) between rows of two arrays aligned on the same focal elements, and 1 − R; shapes (N,).
 
     ``jousselme(delta)`` returns ½ ΔᵀDΔ for the rows of ``delta = m1 − m2``; it is called only
-    when ``r_mode == "jousselme"``, so each caller supplies the form its columns allow.
-    With ``complement``, returns ``(R, 1 − R)``; for ``paper`` the second keeps its relative
-    precision when R is near 1 (:func:`paper_inconsistency`).
+    when ``r_mode == "jousselme"``, so each caller supplies the form its columns allow.  For
+    ``paper``, 1 − R keeps its relative precision when R is near 1 (:func:`paper_inconsistency`).
     """
     delta = m1 - m2
     if r_mode == "paper":
-        return paper_inconsistency(np.abs(delta).sum(axis=1) / 2.0, np.minimum(m1, m2).sum(axis=1), complement)
+        return paper_inconsistency(np.abs(delta).sum(axis=1) / 2.0, np.minimum(m1, m2).sum(axis=1))
     if r_mode == "euclid":
         value = 0.5 * (delta * delta).sum(axis=1)
     else:
         value = jousselme(delta)
     r = np.sqrt(np.clip(value, 0.0, 1.0))
-    return (r, 1.0 - r) if complement else r
+    return r, 1.0 - r
 
 
-def paper_inconsistency(half_distance: np.ndarray, overlap: np.ndarray,
-                        complement: bool = True) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+def paper_inconsistency(half_distance: np.ndarray, overlap: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """R of W (10) as printed, and 1 − R, from Σ_A |Δ(A)| / 2 and the overlap Σ_A min(m1(A), m2(A)).
 
     For two mass functions that sum to 1, Σ |Δ| / 2 = 1 − Σ min(m1, m2).  Where the overlap is
@@ -1615,8 +1612,11 @@ def paper_inconsistency(half_distance: np.ndarray, overlap: np.ndarray,
     Parameters
     ----------
     half_distance, overlap : ndarray, shape (N,)
-    complement : bool
-        Return ``(R, 1 − R)`` rather than R alone.
+
+    Returns
+    -------
+    r, rho : ndarray, shape (N,)
+        R and 1 − R.
 
     Examples
     --------
@@ -1626,10 +1626,7 @@ def paper_inconsistency(half_distance: np.ndarray, overlap: np.ndarray,
     """
     far = overlap < 0.5
     r = np.sqrt(np.where(far, 1.0 - overlap, np.clip(half_distance, 0.0, 1.0)))
-    if not complement:
-        return r
-    rho = np.where(far, overlap / (1.0 + r), 1.0 - r)
-    return r, rho
+    return r, np.where(far, overlap / (1.0 + r), 1.0 - r)
 
 
 class RRuleFusion(_Fusion):
@@ -1695,10 +1692,10 @@ class RRuleFusion(_Fusion):
         """
         cues = self._cues(rows)
         state = _RState.bayesian(*cues[0])
-        r = _state_inconsistency(state, *cues[1], self.r_mode, self.split)                 # W (10)
+        r_rho = _state_inconsistency(state, *cues[1], self.r_mode, self.split)             # W (10)
         for index in range(1, len(cues) - 1):
             p, p_f = cues[index]
-            fold = _Fold(state, p, p_f, r, self.union)
+            fold = _Fold(state, p, p_f, r_rho, self.union)
             self._flagged[rows] |= fold.flagged
             only = positions if index == len(cues) - 2 and self.r_mode != "jousselme" else None
             before, state = state, fold.full(only)
@@ -1708,9 +1705,9 @@ class RRuleFusion(_Fusion):
                 sp = before.s * p
                 sp2 = (sp * sp).sum(axis=0)
                 squares = ((before.s * before.s).sum(axis=0) * (p * p).sum(axis=0) - sp2 + sp.sum(axis=0) ** 2 - sp2)
-                state.q_squares = r[0] * r[0] * np.maximum(squares, 0.0)
-            r = _state_inconsistency(state, *cues[index + 1], self.r_mode, self.split)
-        fold = _Fold(state, *cues[-1], r, self.union)
+                state.q_squares = r_rho[0] * r_rho[0] * np.maximum(squares, 0.0)
+            r_rho = _state_inconsistency(state, *cues[index + 1], self.r_mode, self.split)
+        fold = _Fold(state, *cues[-1], r_rho, self.union)
         self._flagged[rows] |= fold.flagged
         return fold
 
@@ -1790,21 +1787,13 @@ class RRuleFusion(_Fusion):
         put = {k: v[rows] for k, v in sums.items()}
         reduce = np.add.reduce
         put["f"][...], put["pf"][...], put["cf"][...] = f, p_f, c_f
-        # R of W (10) between the first two cues, Σ_A |Δ(A)| / 2 over their singletons, and 1 − R
-        # from their overlap (exactly 0 for disjoint focal sets).
-        d = np.minimum(s, p)
-        overlap = reduce(d, 0)
-        overlap += np.minimum(f, p_f)
-        np.subtract(s, p, out=d)
-        half = reduce(np.abs(d, out=d), 0)
-        half += np.abs(f - p_f)
-        half *= 0.5
-        near = np.zeros(half.shape, dtype=bool)              # rows for the general fold
-        r1, rho1 = paper_inconsistency(half, overlap)
+        # R of W (10) between the first two cues, and 1 − R.
+        r1, rho1 = _state_inconsistency(_RState.bayesian(s, f), p, p_f, "paper", self.split)
         put["r1"][...] = r1
+        near = np.zeros(r1.shape, dtype=bool)                # rows for the general fold
         # First fold (its state is fresh): k_il of every pair to θ_i and θ_l as w_i : w_l, k_iF to
         # θ_i and F as w_i : w_F, R·k_iF to θ_i ∪ F (or ∅).
-        w1 = np.multiply(s, p, out=d)
+        d = w1 = s * p
         w_f = f * p_f
         inverse = w1 + w_f
         _below(inverse, near)

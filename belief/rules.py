@@ -1835,7 +1835,7 @@ def inconsistency(first, second, *aligned, r_mode: str = "paper") -> np.ndarray:
             r_mode = aligned[2]
         _check_r_options(r_mode)
         return _aligned_inconsistency(np.asarray(first, dtype=np.float64), np.asarray(second, dtype=np.float64),
-                                      aligned[0], aligned[1], r_mode)
+                                      aligned[0], aligned[1], r_mode)[0]
     if len(aligned) > 1:
         raise TypeError("inconsistency(first, second, r_mode) takes at most three positional arguments for batches")
     if aligned:
@@ -1856,17 +1856,17 @@ def inconsistency(first, second, *aligned, r_mode: str = "paper") -> np.ndarray:
     v1 = np.take(p1, [index1.get(e, len(b1.focal)) for e in focal], axis=1)
     v2 = np.take(p2, [index2.get(e, len(b2.focal)) for e in focal], axis=1)
     return _aligned_inconsistency(np.broadcast_to(v1, (n, len(focal))), np.broadcast_to(v2, (n, len(focal))),
-                                  focal, model, r_mode)
+                                  focal, model, r_mode)[0]
 
 
 def _aligned_inconsistency(m1: np.ndarray, m2: np.ndarray, focal: Sequence[Element], model: Model,
-                           r_mode: str = "paper", complement: bool = False):
-    """R of W (10) between rows of two arrays aligned on ``focal``, shape (N,); with ``complement``, (R, 1 − R)."""
+                           r_mode: str = "paper") -> tuple[np.ndarray, np.ndarray]:
+    """R of W (10) between rows of two arrays aligned on ``focal``, and 1 − R; shapes (N,)."""
     def jousselme(delta: np.ndarray) -> np.ndarray:
         matrix = _jousselme_matrix(model, tuple(focal))
         return 0.5 * np.einsum("na,ab,nb->n", delta, matrix, delta)
 
-    return bayesian.aligned_inconsistency(m1, m2, r_mode, jousselme, complement)
+    return bayesian.aligned_inconsistency(m1, m2, r_mode, jousselme)
 
 
 @lru_cache(maxsize=256)
@@ -1907,7 +1907,7 @@ def _r_pair_entries(rp: _RPlan, v1: np.ndarray, v2: np.ndarray, model: Model, r_
         return entries
     p1, p2 = _padded(v1), _padded(v2)
     r, rho = _aligned_inconsistency(np.take(p1, rp.aligned[0], axis=1), np.take(p2, rp.aligned[1], axis=1),
-                                    rp.union_focal, model, r_mode, complement=True)      # W (10)
+                                    rp.union_focal, model, r_mode)                       # W (10)
     k = np.add.reduceat(gather_product([v1, v2], rp.conflict), rp.pair_starts, axis=1)   # W (11)
     if len(rp.projection_starts):
         m0 = _padded(np.add.reduceat(gather_product([v1, v2], rp.projection), rp.projection_starts, axis=1))

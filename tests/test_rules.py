@@ -769,7 +769,8 @@ def test_r_rule_of_nearly_disjoint_cues_keeps_one_minus_r_to_its_last_digits(eng
         bel = float(sum((v for k, v in expected.items() if k and k <= regions), Fraction(0)))
         assert fused.mass([element])[0, 0] == pytest.approx(mass, rel=1e-12, abs=1e-15), element
         assert fused.bel([element])[0, 0] == pytest.approx(bel, rel=1e-12, abs=1e-15), element
-    assert fused.mass([singletons[0]])[0, 0] == pytest.approx(6.2912975101672e-06, rel=1e-12)
+    # The case is one where the noise mattered: t1 holds far more than any rounding of 1 − R.
+    assert expected[case.regions(singletons[0])] > 1e-6
     if engine == "general":
         assert_matches(regions_result(fused[0], case), expected)
 
