@@ -79,13 +79,7 @@ def assign(tracks, candidates, min_iou: float = 0.3, likeness=None, appearance_w
     >>> assign(two, [[1, 0, 10, 20]], likeness=[[0.4], [0.9]], appearance_weight=0.75).tolist()
     [-1, 0]
     """
-    if isinstance(min_iou, bool) or not isinstance(min_iou, (int, float, np.integer, np.floating)) \
-            or not 0 < min_iou <= 1:
-        raise TrackingError(f"min_iou must lie in (0, 1], got {min_iou!r}")
-    tracks = check_boxes(tracks, "track boxes").reshape(-1, 4)
-    candidates = np.asarray(candidates, dtype=np.float64)
-    candidates = check_boxes(candidates[:, :4] if candidates.ndim == 2 else candidates,
-                             "candidate boxes").reshape(-1, 4)
+    tracks, candidates, min_iou = _gated_boxes(tracks, candidates, min_iou)
     appearance_weight = checks.number("appearance_weight", appearance_weight, minimum=0.0)
     if likeness is not None:
         likeness = np.asarray(likeness, dtype=np.float64)
@@ -126,6 +120,12 @@ def contested_pairs(tracks, candidates, min_iou: float = 0.3) -> tuple[np.ndarra
     rows, cols : ndarray of int
         Track and candidate of each pair.
 
+    Raises
+    ------
+    TrackingError
+        As :func:`assign`, for boxes that are not finite (n, 4) arrays with positive sizes
+        or a gate outside (0, 1].
+
     Examples
     --------
     >>> contested_pairs(np.array([[0, 0, 10, 20], [3, 0, 10, 20]]), np.array([[1, 0, 10, 20]]))
@@ -133,10 +133,21 @@ def contested_pairs(tracks, candidates, min_iou: float = 0.3) -> tuple[np.ndarra
     >>> contested_pairs(np.array([[0, 0, 10, 20]]), np.array([[1, 0, 10, 20], [50, 0, 10, 20]]))
     (array([], dtype=int64), array([], dtype=int64))
     """
-    within = iou(tracks, np.asarray(candidates)[:, :4]) >= min_iou
+    tracks, candidates, min_iou = _gated_boxes(tracks, candidates, min_iou)
+    within = iou(tracks, candidates) >= min_iou
     if (within.sum(axis=0) <= 1).all() and (within.sum(axis=1) <= 1).all():
         return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
     return np.nonzero(within)
+
+
+def _gated_boxes(tracks, candidates, min_iou) -> tuple[np.ndarray, np.ndarray, float]:
+    """The tracks (τ, 4), the candidates' boxes (n, 4) and the gate, checked."""
+    min_iou = checks.fraction("min_iou", min_iou, allow_zero=False)
+    tracks = check_boxes(tracks, "track boxes").reshape(-1, 4)
+    candidates = np.asarray(candidates, dtype=np.float64)
+    candidates = check_boxes(candidates[:, :4] if candidates.ndim == 2 else candidates,
+                             "candidate boxes").reshape(-1, 4)
+    return tracks, candidates, min_iou
 
 
 def min_cost_assignment(cost) -> tuple[np.ndarray, np.ndarray]:

@@ -193,6 +193,12 @@ def test_the_tracker_weighs_each_detection_by_how_much_it_looks_like_each_track(
 def test_bad_assignment_inputs_are_refused():
     with pytest.raises(TrackingError, match="min_iou"):
         assign([[0, 0, 1, 1]], [[0, 0, 1, 1]], min_iou=0)
+    with pytest.raises(TrackingError, match=r"min_iou must be a number in \(0, 1\]"):
+        contested_pairs([[0, 0, 1, 1]], [[0, 0, 1, 1]], min_iou=1.5)
+    with pytest.raises(TrackingError, match="track boxes"):
+        contested_pairs([[0, 0, 1, np.nan]], [[0, 0, 1, 1]])
+    with pytest.raises(TrackingError, match="candidate boxes"):
+        contested_pairs([[0, 0, 1, 1]], [[0, 0, -1, 1, 0.9]])
     with pytest.raises(TrackingError, match="candidate boxes"):
         assign([[0, 0, 1, 1]], [[0, 0, -1, 1]])
     assert assign(np.zeros((0, 4)), [[0, 0, 1, 1, 0.5]]).shape == (0,)
