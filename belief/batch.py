@@ -21,6 +21,7 @@ import numpy as np
 from belief.errors import FrameError, InvalidMassError, TotalConflictError, UndefinedTransformError
 from belief.frame import Element, Frame
 from belief.model import Model, _show
+from belief.plan import weighted_sum
 
 if TYPE_CHECKING:
     from belief.mass import MassFunction
@@ -545,12 +546,12 @@ class MassBatch:
             Shape (N,) for one query or with ``select``, (N, Q) for a list of Q queries.
         """
         plan, single = self._plan(queries)
-        return self._finish(self.values @ plan.subset, single, select)
+        return self._finish(weighted_sum(self.values, plan.subset), single, select)
 
     def pls(self, queries, *, select=None) -> np.ndarray:
         """Plausibility Pls(A) = Σ_{B∩A≠∅} m(B) (W (9)); shapes and ``select`` as :meth:`bel`."""
         plan, single = self._plan(queries)
-        return self._finish(self.values @ plan.meets, single, select)
+        return self._finish(weighted_sum(self.values, plan.meets), single, select)
 
     def mass(self, queries, *, select=None) -> np.ndarray:
         """The mass m(A) of each query (0 for an element that is not focal); shapes and ``select`` as :meth:`bel`.
@@ -566,12 +567,12 @@ class MassBatch:
         array([0.4, 0.1])
         """
         plan, single = self._plan(queries)
-        return self._finish(self.values @ plan.equal, single, select)
+        return self._finish(weighted_sum(self.values, plan.equal), single, select)
 
     def q(self, queries) -> np.ndarray:
         """Commonality q(A) = Σ_{B⊇A} m(B); shape (N,) or (N, Q)."""
         plan, single = self._plan(queries)
-        return self._shape(self.values @ plan.superset, single)
+        return self._shape(weighted_sum(self.values, plan.superset), single)
 
     commonality = q
 
@@ -588,7 +589,7 @@ class MassBatch:
         """
         check_cardinality_range(self, "BetP")
         plan, single = self._plan(queries)
-        return self._finish(self._normal_values("BetP") @ plan.ratio, single, select)
+        return self._finish(weighted_sum(self._normal_values("BetP"), plan.ratio), single, select)
 
     def dsmp(self, queries, epsilon: float = 0.001) -> np.ndarray:
         """DSmP_ε(A), the proportional probabilistic transformation of DSmT.
@@ -605,7 +606,7 @@ class MassBatch:
         plan, single = self._plan(queries)
         m = self._normal_values("DSmP")
         numerator = np.einsum("nz,zxa->nxa", m, plan.unit_in_meet) + epsilon * plan.meet_cardinality[None]
-        denominator = m @ plan.unit_in_focal + epsilon * plan.focal_cardinality[None]
+        denominator = weighted_sum(m, plan.unit_in_focal) + epsilon * plan.focal_cardinality[None]
         live = m > 0
         if (live & (denominator <= 0)).any():
             n, x = map(int, np.argwhere(live & (denominator <= 0))[0])
@@ -628,7 +629,7 @@ class MassBatch:
         mapping = np.zeros((len(targets), len(order)))
         for i, t in enumerate(targets):
             mapping[i, column[t]] = 1.0
-        values = self.values @ mapping
+        values = weighted_sum(self.values, mapping)
         return MassBatch._trusted(self.model, tuple(order), values, canonical=True)
 
     def discount(self, alpha: float) -> "MassBatch":

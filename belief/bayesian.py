@@ -67,7 +67,7 @@ from belief.batch import MassBatch, check_select, measure_plan
 from belief.errors import InvalidMassError, ModelError, TotalConflictError
 from belief.frame import Element
 from belief.model import Model
-from belief.plan import check_joint
+from belief.plan import check_joint, weighted_sum
 
 __all__ = ["ENGINES", "ClosedFormBatch", "ExclusiveSplit", "exclusive_split", "closed_form_rules",
            "ConjunctiveFusion", "PCRFusion", "RRuleFusion"]
@@ -2047,7 +2047,7 @@ def _raw(batch: MassBatch, kind: str, queries: tuple[Element, ...]) -> np.ndarra
     """A measure of a general batch before any normalisation, shape (N, Q) (BetP: its numerator)."""
     plan = measure_plan(batch.model, batch.focal, queries)
     table = {"bel": plan.subset, "pls": plan.meets, "mass": plan.equal, "betp": plan.ratio}[kind]
-    return batch.values @ table
+    return weighted_sum(batch.values, table)
 
 
 # -- the lazy batch ------------------------------------------------------------------------------------

@@ -35,7 +35,7 @@ from belief.model import Model
 __all__ = ["TuplePlan", "Scatter", "FocalKey", "tuple_plan", "MAX_TUPLES", "MAX_WORK", "MAX_BYTES",
            "MAX_ELEMENT_TUPLES", "JobCost", "joint_cost", "check_joint", "FoldBudget", "coded_fast", "Encoding",
            "encode", "coded_table", "canonical_codes", "plan_lookup", "sighted", "mask_terms", "union_ranks",
-           "union_elements", "RANK_TABLE_WIDTH"]
+           "union_elements", "RANK_TABLE_WIDTH", "weighted_sum"]
 
 # The limits below are read when a combination starts, so a caller may raise them
 # (``belief.plan.MAX_TUPLES = ...``).  The defaults keep an accepted job under about ten
@@ -222,6 +222,54 @@ class TuplePlan:
         """Π_i m_i(X_i) for every tuple (optionally in ``order``); values[i] has shape (N, K_i)."""
         columns = self.columns if order is None else tuple(c[order] for c in self.columns)
         return gather_product(values, columns)
+
+
+def weighted_sum(values: np.ndarray, table: np.ndarray) -> np.ndarray:
+    """Σ_k values[:, k] · table[k, q] for every q, shape (N, Q): the same bits on every machine and in every context.
+
+    Each column q is summed over the k with a non-zero weight, in the order of k, each term
+    rounded on its own (a weight of 1 adds the mass itself).  A column of the result thus
+    depends neither on the other columns of ``table``, nor on the other rows, nor on columns
+    of ``values`` whose weight is 0 (a focal element that another mass function of a batch
+    holds), nor on the CPU.  A BLAS matrix product (``values @ table``) chooses its kernel,
+    its fused multiply-adds and its order of summation by CPU and by shape, so that BetP of
+    one query could differ in its last bit from BetP of the same query in a list, and from
+    one machine to another.
+
+    Parameters
+    ----------
+    values : ndarray, shape (N, K)
+    table : ndarray, shape (K, Q)
+
+    Examples
+    --------
+    >>> weighted_sum(np.array([[0.1, 0.2, 0.7]]), np.array([[1.0, 0.5], [0.0, 0.0], [1.0, 0.25]]))
+    array([[0.8  , 0.225]])
+    """
+    n = values.shape[0]
+    out = np.empty((n, table.shape[1]))
+    weights = _nonzero_columns(table)
+    # Blocks that stay in the CPU's cache, but never so short that the Python loop dominates.
+    step = max(4096, _WEIGHTED_BLOCK // max(values.shape[1] + table.shape[1], 1))
+    for start in range(0, n, step):
+        columns = np.ascontiguousarray(values[start:start + step].T)     # each focal element's masses
+        block = np.zeros((table.shape[1], columns.shape[1]))
+        term = np.empty(columns.shape[1])
+        for q, (rows, factors) in enumerate(weights):
+            total = block[q]
+            for k, w in zip(rows, factors):
+                total += columns[k] if w == 1.0 else np.multiply(columns[k], w, out=term)
+        out[start:start + step] = block.T
+    return out
+
+
+#: Floats per block of rows in :func:`weighted_sum` (about 1 MB).
+_WEIGHTED_BLOCK = 1 << 17
+
+
+def _nonzero_columns(table: np.ndarray) -> list[tuple[list[int], list[float]]]:
+    """For each column of ``table``, the rows of its non-zero weights and those weights."""
+    return [(np.flatnonzero(column).tolist(), column[column != 0].tolist()) for column in table.T]
 
 
 def gather_product(values: Sequence[np.ndarray], columns: Sequence[np.ndarray]) -> np.ndarray:

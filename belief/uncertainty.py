@@ -34,6 +34,7 @@ from belief.distances import _as_batch
 from belief.errors import UndefinedMeasureError, UnknownMeasureError
 from belief.mass import MassFunction
 from belief.model import Model
+from belief.plan import weighted_sum
 
 __all__ = ["nonspecificity", "deng_entropy", "ambiguity", "discord", "dissonance", "confusion", "uncertainty",
            "MEASURES", "is_power_set_model"]
@@ -131,7 +132,7 @@ def nonspecificity(m: Source):
     1.584963
     """
     batch, single, cards = _prepare(m, "the nonspecificity")
-    return _result(batch.values @ np.log2(np.maximum(cards, 1.0)), single)
+    return _result(weighted_sum(batch.values, np.log2(np.maximum(cards, 1.0))[:, None])[:, 0], single)
 
 
 def deng_entropy(m: Source):
@@ -177,7 +178,7 @@ def deng_entropy(m: Source):
     c = np.maximum(cards, 1.0)
     log_subsets = c + np.log2(-np.expm1(-c * math.log(2.0)))     # log2(2^C - 1), exact for large C
     values = batch.values
-    return _result(batch.values @ log_subsets - _weighted_log(values, values), single)
+    return _result(weighted_sum(values, log_subsets[:, None])[:, 0] - _weighted_log(values, values), single)
 
 
 def ambiguity(m: Source):
