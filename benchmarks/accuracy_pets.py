@@ -71,8 +71,8 @@ class Config(NamedTuple):
 
 CONFIGS: dict[str, Config] = {
     "default": Config({}),                                         # R-weighted rule, colour+location+foreground
-    "dempster": Config({"rule": "dempster"}),
-    "dsmc": Config({"rule": "dsmc"}),
+    "dempster": Config({"belief": {"rule": "dempster"}}),
+    "dsmc": Config({"belief": {"rule": "dsmc"}}),
     "edges": Config({"cues": ALL_CUES}),                           # the edge cue added to the default
     "adaptive": Config({"fusion": "adaptive"}),                    # C's adaptive fusion, default cues
     "adaptive+edges": Config({"fusion": "adaptive", "cues": ALL_CUES}),

@@ -42,8 +42,8 @@ WARM_UP = 50
 #: name -> (settings on top of the defaults, what the candidate changes)
 CANDIDATES: dict[str, tuple[dict, str]] = {
     "default": ({}, "the defaults"),
-    "pcr6": ({"rule": "pcr6"}, "PCR6 instead of the R-weighted rule"),
-    "dsmc": ({"rule": "dsmc"}, "DSmC instead of the R-weighted rule"),
+    "pcr6": ({"belief": {"rule": "pcr6"}}, "PCR6 instead of the R-weighted rule"),
+    "dsmc": ({"belief": {"rule": "dsmc"}}, "DSmC instead of the R-weighted rule"),
     "product": ({"fusion": "product"}, "product of the cues' likelihoods instead of a belief rule"),
     "detections cue": ({"cues": ["colour", "location", "foreground", "detections"]},
                        "the candidates fused as a fourth cue: the detections, the person blobs without them, "

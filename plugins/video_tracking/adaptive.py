@@ -58,10 +58,10 @@ from typing import Optional, Union
 
 import numpy as np
 
-from belief_tracking import checks
-from belief_tracking.errors import TrackingError
-from belief_tracking.particles import DegenerateWeightsWarning, systematic
-from belief_tracking.weighting import Evidence, Weighing
+from . import checks
+from .errors import TrackingError
+from .particles import DegenerateWeightsWarning, systematic
+from .weighting import Evidence, Weighing
 
 __all__ = [
     "AdaptiveConfig",

@@ -19,8 +19,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from belief_tracking.adaptive import AdaptiveConfig, occluded, total_similarity
-from belief_tracking.cues import AppearanceCue, Observation
+from .adaptive import AdaptiveConfig, occluded, total_similarity
+from .cues import AppearanceCue, Observation
 
 __all__ = ["AppearanceFollower", "row_similarity"]
 

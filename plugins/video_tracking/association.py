@@ -20,9 +20,9 @@ import math
 
 import numpy as np
 
-from belief_tracking import checks
-from belief_tracking.boxes import check_boxes, iou
-from belief_tracking.errors import TrackingError
+from . import checks
+from .boxes import check_boxes, iou
+from .errors import TrackingError
 
 __all__ = ["assign", "contested_pairs", "min_cost_assignment", "UNASSIGNED"]
 

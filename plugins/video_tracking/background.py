@@ -42,8 +42,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from belief_tracking.errors import TrackingError
-from belief_tracking.extras import require
+from .errors import TrackingError
+from .extras import require
 
 cv2 = require("cv2")
 

@@ -38,11 +38,11 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from belief_tracking.boxes import check_boxes, pixel_ranges
-from belief_tracking import checks
-from belief_tracking.errors import TrackingError
-from belief_tracking.extras import require
-from belief_tracking.perspective import PersonSize
+from .boxes import check_boxes, pixel_ranges
+from . import checks
+from .errors import TrackingError
+from .extras import require
+from .perspective import PersonSize
 
 __all__ = ["person_boxes", "box_mask", "fit_person_size"]
 

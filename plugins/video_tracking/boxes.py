@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from belief_tracking.errors import TrackingError
+from .errors import TrackingError
 
 __all__ = ["check_boxes", "iou", "intersections", "box_centres", "pixel_ranges"]
 

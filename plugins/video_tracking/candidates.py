@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from belief_tracking.blobs import person_boxes
-from belief_tracking.initiation import InitiationConfig
-from belief_tracking.perspective import PersonSize
+from .blobs import person_boxes
+from .initiation import InitiationConfig
+from .perspective import PersonSize
 
 __all__ = ["BlobCandidates", "BLOB_SCORE"]
 

@@ -24,7 +24,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from belief_tracking.errors import TrackingError
+from .errors import TrackingError
 
 __all__ = ["number", "integer", "choice", "flag", "fraction", "instance", "image_shape"]
 

@@ -32,7 +32,7 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
-from belief_tracking.extras import require
+from .extras import require
 
 __all__ = ["register", "register_eval", "register_experiment", "AUTOMATIC_WARM_UP", "parse_setting"]
 
@@ -67,14 +67,14 @@ def parse_setting(text: str) -> tuple[list[str], Any]:
 
     Examples
     --------
-    >>> parse_setting("masses=normalised")
-    (['masses'], 'normalised')
+    >>> parse_setting("belief.masses=normalised")
+    (['belief', 'masses'], 'normalised')
     >>> parse_setting("location.sigma=8")
     (['location', 'sigma'], 8)
     >>> parse_setting("cues=['colour', 'edges']")
     (['cues'], ['colour', 'edges'])
     """
-    from belief_tracking.errors import TrackingError
+    from .errors import TrackingError
 
     try:
         import tomllib
@@ -84,7 +84,8 @@ def parse_setting(text: str) -> tuple[list[str], Any]:
     key, separator, value = text.partition("=")
     path = [part.strip() for part in key.split(".")]
     if not separator or not all(path):
-        raise TrackingError(f"--set takes KEY=VALUE (e.g. masses=normalised or location.sigma=8), got {text!r}")
+        raise TrackingError(f"--set takes KEY=VALUE (e.g. belief.masses=normalised or location.sigma=8), "
+                            f"got {text!r}")
     try:
         parsed = tomllib.loads(f"value = {value.strip()}")["value"]
     except tomllib.TOMLDecodeError:
@@ -94,7 +95,7 @@ def parse_setting(text: str) -> tuple[list[str], Any]:
 
 def _settings(args: argparse.Namespace) -> dict[str, Any]:
     """The TrackerConfig settings of the command line: ``--set`` values, then the dedicated flags."""
-    from belief_tracking.errors import TrackingError
+    from .errors import TrackingError
 
     options: dict[str, Any] = {}
     for text in args.set or ():
@@ -105,9 +106,13 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
             if not isinstance(table, dict):
                 raise TrackingError(f"--set {text}: {part} is not a table of settings")
         table[path[-1]] = value
-    flags = {"particles": args.particles, "rule": args.rule, "weight": args.weight, "fusion": args.fusion,
-             "warm_up": args.warm_up, "diagnostics": args.diagnostics}
+    flags = {"particles": args.particles, "fusion": args.fusion, "warm_up": args.warm_up,
+             "diagnostics": args.diagnostics}
     options.update({key: value for key, value in flags.items() if value is not None})
+    belief = {key: value for key, value in (("rule", args.rule), ("weight", args.weight)) if value is not None}
+    if belief:
+        table = options.get("belief")
+        options["belief"] = {**(table if isinstance(table, dict) else {}), **belief}
     if args.cues is not None:
         options["cues"] = _cues(args.cues)
     if args.adaptive_particles:
@@ -127,7 +132,7 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _detections(args: argparse.Namespace, frame_count: int | None, width: int, height: int):
-    from belief_tracking.detections import read_detections
+    from .detections import read_detections
 
     if args.detections is None:
         return None
@@ -161,7 +166,7 @@ def _sigterm_interrupts() -> Iterator[None]:
 
 
 def _output_dir(text: str | None, option: str = "--out") -> None:
-    from belief_tracking.errors import TrackingError
+    from .errors import TrackingError
 
     if text is not None and not text.strip():
         raise TrackingError(f"{option} must name a folder, got an empty path (use {option} . for the working "
@@ -179,12 +184,12 @@ def _cmd_track(args: argparse.Namespace) -> int:
 
 
 def _track(args: argparse.Namespace) -> int:
-    from belief_tracking import scenes
-    from belief_tracking.config import TrackerConfig
-    from belief_tracking.errors import TrackingError, VideoError
-    from belief_tracking.initiation import init_from_gt, read_init_boxes
-    from belief_tracking.runner import run
-    from belief_tracking.sources import open_source
+    from . import scenes
+    from .config import TrackerConfig
+    from .errors import TrackingError, VideoError
+    from .initiation import init_from_gt, read_init_boxes
+    from .runner import run
+    from .sources import open_source
 
     _output_dir(args.out)
     config = TrackerConfig.from_settings(_settings(args), "belief track")
@@ -307,7 +312,7 @@ def register(subparsers: Any) -> None:
                    help="diagnostics.csv columns: those of the running parts (default), or all of them, whatever "
                         "the fusion (W (33)-(35) masses, C (13) confidences, C (15) similarity)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
-                   help="any tracker setting, e.g. --set masses=normalised, --set location.literal=true, "
+                   help="any tracker setting, e.g. --set belief.masses=normalised, --set location.literal=true, "
                         "--set adaptive_fusion.mix_norm=raw (repeatable; values in TOML syntax)")
     p.add_argument("--no-video", action="store_true", help="do not write annotated.avi")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -316,8 +321,8 @@ def register(subparsers: Any) -> None:
 
 # -- belief eval -----------------------------------------------------------------------------------
 def _cmd_eval(args: argparse.Namespace) -> int:
-    from belief_tracking.evaluation import evaluate
-    from belief_tracking.motfiles import read_mot
+    from .evaluation import evaluate
+    from .motfiles import read_mot
 
     # A run that found nobody writes an empty tracks.txt: it scores as missing every box.
     tracks = read_mot(args.tracks, allow_empty=True)
@@ -362,9 +367,9 @@ def register_eval(subparsers: Any) -> None:
 
 # -- belief experiment -----------------------------------------------------------------------------
 def _cmd_experiment(args: argparse.Namespace) -> int:
-    from belief_tracking.experiment import load_experiment
-    from belief_tracking.grid import check_output, run_experiment
-    from belief_tracking.tables import format_summary
+    from .experiment import load_experiment
+    from .grid import check_output, run_experiment
+    from .tables import format_summary
 
     _output_dir(args.out)
     experiment = load_experiment(args.config, data_dir=args.data)

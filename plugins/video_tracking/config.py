@@ -15,17 +15,16 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, is_dataclass
 from typing import Any
 
-from belief.rules import get_rule
 from belief.errors import BeliefError
-from belief_tracking import checks
-from belief_tracking.adaptive import AdaptiveConfig
-from belief_tracking.background import BackgroundConfig
-from belief_tracking.cues import CUES, ColourConfig, DetectionConfig, EdgeConfig, LocationConfig
-from belief_tracking.errors import TrackingError, UnknownCueError
-from belief_tracking.fusion import MASSES, WEIGHTS, FusionConfig
-from belief_tracking.initiation import InitiationConfig
-from belief_tracking.particles import RESAMPLERS, MotionConfig
-from belief_tracking.weighting import WEIGHTINGS
+from . import checks
+from .adaptive import AdaptiveConfig
+from .background import BackgroundConfig
+from .cues import CUES, ColourConfig, DetectionConfig, EdgeConfig, LocationConfig
+from .errors import TrackingError, UnknownCueError
+from .fusion import FusionConfig
+from .initiation import InitiationConfig
+from .particles import RESAMPLERS, MotionConfig
+from .weighting import WEIGHTINGS
 
 __all__ = ["TrackerConfig", "KAPPAS", "DIAGNOSTICS", "MAX_TARGETS"]
 
@@ -59,18 +58,12 @@ class TrackerConfig:
         confidence-weighted mix of the product and sum rules (C (11)–(14)), with the
         occlusion test and the template update of C (15)–(16); ``"sum"`` and ``"product"``
         combine the cues' own-target likelihoods with equal weights or by their product.
-    rule : str
-        A combination rule of :data:`belief.RULES` (default: the R-weighted rule of SPEC A.4).
-    weight : {"bel", "pls", "betp"}
-        The measure of θ_J that weighs a particle of target J (W (32): Bel).
-    r_mode, empty_mode : str
-        Options of the R-weighted rule (SPEC A.4: the printed inconsistency R of W (10), and
-        the conflict of a target with FA kept on θ_j ∪ FA).
-    masses : {"relative", "normalised"}
-        How a cue's likelihoods become its mass function
-        (:func:`~belief_tracking.fusion.cue_masses`): ``"relative"`` divides each by
-        the best own-target likelihood of the particle's set and gives the unclaimed support
-        to FA; ``"normalised"`` is W (20)–(21) as printed.
+    belief : FusionConfig
+        How the belief strategy fuses the cues and weighs a particle
+        (:class:`~belief_tracking.fusion.FusionConfig`): the combination rule (default the
+        R-weighted rule of SPEC A.4), the measure of θ_J that weighs a particle of target J
+        (W (32): Bel), the options of the R-weighted rule and how a cue's likelihoods become
+        its mass function.  The adaptive particle count fuses with it whatever the strategy.
     motion : MotionConfig
         Noise of the constant-velocity model (W-S2).
     resampling : str
@@ -143,11 +136,7 @@ class TrackerConfig:
     particles: int = 100
     cues: tuple[str, ...] = ("colour", "location", "foreground")
     fusion: str = "belief"
-    rule: str = "r_rule"
-    weight: str = "bel"
-    r_mode: str = "paper"
-    empty_mode: str = "union"
-    masses: str = "relative"
+    belief: FusionConfig = field(default_factory=FusionConfig)
     motion: MotionConfig = field(default_factory=MotionConfig)
     resampling: str = "systematic"
     ess_threshold: float = 1.0
@@ -180,21 +169,14 @@ class TrackerConfig:
         object.__setattr__(self, "cues", cues)
         if self.fusion not in WEIGHTINGS:
             raise TrackingError(f"unknown fusion {self.fusion!r}; known fusions: {', '.join(WEIGHTINGS)}")
-        try:
-            get_rule(self.rule)
-        except (BeliefError, TypeError) as exc:
-            raise TrackingError(f"TrackerConfig.rule: {exc}") from None
-        checks.choice("TrackerConfig.weight", self.weight, WEIGHTS)
-        checks.choice("TrackerConfig.masses", self.masses, MASSES)
-        self.fusion_config()                   # r_mode and empty_mode
         if self.resampling not in RESAMPLERS:
             raise TrackingError(f"unknown resampler {self.resampling!r}; known: {', '.join(sorted(RESAMPLERS))}")
         object.__setattr__(self, "ess_threshold", checks.fraction("TrackerConfig.ess_threshold", self.ess_threshold))
         object.__setattr__(self, "init_sigma", checks.number("TrackerConfig.init_sigma", self.init_sigma,
                                                              minimum=0.0))
-        for name, kind in (("motion", MotionConfig), ("location", LocationConfig), ("colour", ColourConfig),
-                           ("foreground", ColourConfig), ("edges", EdgeConfig), ("detections", DetectionConfig),
-                           ("background", BackgroundConfig),
+        for name, kind in (("belief", FusionConfig), ("motion", MotionConfig), ("location", LocationConfig),
+                           ("colour", ColourConfig), ("foreground", ColourConfig), ("edges", EdgeConfig),
+                           ("detections", DetectionConfig), ("background", BackgroundConfig),
                            ("adaptive_fusion", AdaptiveConfig)):
             checks.instance(f"TrackerConfig.{name}", getattr(self, name), kind)
         checks.choice("TrackerConfig.kappa", self.kappa, KAPPAS)
@@ -232,7 +214,7 @@ class TrackerConfig:
         """
         if not isinstance(settings, Mapping):
             raise TrackingError(f"{where} must be a table of TrackerConfig settings, got {settings!r}")
-        _check_keys(settings, [f.name for f in fields(cls)], where)
+        _check_keys(settings, [f.name for f in fields(cls)], where, {"belief": FusionConfig})
         defaults = cls()
         keywords = {}
         for name, value in settings.items():
@@ -250,11 +232,6 @@ class TrackerConfig:
             return cls(**keywords)
         except BeliefError as exc:
             raise TrackingError(f"{where}: {exc}") from None
-
-    def fusion_config(self) -> FusionConfig:
-        """The :class:`~belief_tracking.fusion.FusionConfig` of these settings."""
-        return FusionConfig(rule=self.rule, weight=self.weight, r_mode=self.r_mode, empty_mode=self.empty_mode,
-                            masses=self.masses)
 
     def cue_config(self, name: str):
         """The settings object of cue ``name``."""
@@ -283,14 +260,17 @@ class TrackerConfig:
         ('rule r_rule, weight bel', 'sum fusion')
         """
         if self.fusion == "belief":
-            return f"rule {self.rule}, weight {self.weight}"
+            return f"rule {self.belief.rule}, weight {self.belief.weight}"
         return f"{self.fusion} fusion"
 
 
-def _check_keys(mapping: Mapping[str, Any], known: list[str], where: str) -> None:
+def _check_keys(mapping: Mapping[str, Any], known: list[str], where: str, nested: Mapping[str, type] = {}) -> None:
+    """Refuse a key of ``mapping`` not in ``known``; a key of a ``nested`` table is named with its table."""
     unknown = [key for key in mapping if key not in known]
     if unknown:
-        raise TrackingError(f"{where}: unknown key {unknown[0]!r}; known keys: {', '.join(known)}")
+        home = next((table for table, kind in nested.items() if unknown[0] in {f.name for f in fields(kind)}), None)
+        hint = f"; {unknown[0]} is a setting of the {home} table: {home}.{unknown[0]}" if home else ""
+        raise TrackingError(f"{where}: unknown key {unknown[0]!r}{hint}; known keys: {', '.join(known)}")
 
 
 def _dataclass(kind: type, value: Any, where: str):

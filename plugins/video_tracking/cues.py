@@ -38,10 +38,10 @@ from typing import ClassVar, NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
-from belief_tracking import checks
-from belief_tracking.boxes import box_centres, check_boxes
-from belief_tracking.detections import check_rows
-from belief_tracking.errors import TrackingError, UnknownCueError
+from . import checks
+from .boxes import box_centres, check_boxes
+from .detections import check_rows
+from .errors import TrackingError, UnknownCueError
 
 __all__ = [
     "Observation",
@@ -1128,7 +1128,7 @@ class ColourCue:
         >>> cue.templates.tolist()
         [[1.0]]
         """
-        from belief_tracking.adaptive import update_templates
+        from .adaptive import update_templates
 
         updated = update_templates(self._initial, self._templates, observed, frozen)
         totals = updated.sum(axis=1, keepdims=True)

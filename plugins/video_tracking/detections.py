@@ -13,7 +13,7 @@ from os import PathLike
 
 import numpy as np
 
-from belief_tracking.errors import DetectionFileError, TrackingError
+from .errors import DetectionFileError, TrackingError
 
 __all__ = ["Detections", "DETECTION_COLUMNS", "read_detections", "write_detections", "check_detections",
            "check_rows"]
@@ -150,7 +150,7 @@ def read_detections(path: str | PathLike[str], *, frame_count: int | None = None
     belief_tracking.errors.DetectionFileError: .../det.txt, line 1: the score 1.5 is outside [0, 1] ...
     """
     from belief.textfiles import read_text
-    from belief_tracking.motfiles import check_box, check_frame, text_lines
+    from .motfiles import check_box, check_frame, text_lines
 
     name = str(path)
     text = read_text(path, "detection file", DetectionFileError, encoding="utf-8-sig")

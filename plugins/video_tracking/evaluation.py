@@ -30,10 +30,10 @@ from typing import Any
 
 import numpy as np
 
-from belief_tracking.boxes import check_boxes, iou
-from belief_tracking.errors import TrackingError
-from belief_tracking.extras import require
-from belief_tracking.motfiles import MAX_COORDINATE, MAX_FRAME
+from .boxes import check_boxes, iou
+from .errors import TrackingError
+from .extras import require
+from .motfiles import MAX_COORDINATE, MAX_FRAME
 
 __all__ = [
     "Scores",

@@ -20,7 +20,7 @@ import os
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any, TypeVar
 
-from belief_tracking.errors import TrackingError
+from .errors import TrackingError
 
 __all__ = ["outcomes", "executor", "runs_here"]
 

@@ -41,7 +41,7 @@ The configuration is a TOML file::
 
     [[methods]]
     name = "R-rule"
-    rule = "r_rule"
+    belief.rule = "r_rule"              # the belief fusion's settings (FusionConfig)
 
     [[methods]]
     name = "adaptive"
@@ -87,8 +87,8 @@ from typing import Any
 
 import numpy as np
 
-from belief_tracking.errors import TrackingError
-from belief_tracking.extras import require
+from .errors import TrackingError
+from .extras import require
 
 __all__ = [
     "ExperimentError",
@@ -166,7 +166,7 @@ class SequenceSpec:
     detections: str | None = None
 
     def __post_init__(self) -> None:
-        from belief_tracking import scenes
+        from . import scenes
 
         if not isinstance(self.name, str) or not self.name.strip():
             raise ExperimentError(f"a sequence needs a non-empty name, got {self.name!r}")
@@ -190,7 +190,7 @@ class SequenceSpec:
 
     def load(self) -> tuple[Any, np.ndarray]:
         """The frames to track (a rendered scene or a video path) and the ground-truth rows."""
-        from belief_tracking.motfiles import read_mot
+        from .motfiles import read_mot
 
         if self.scene is not None:
             scene = _rendered(self.scene, self.scene_seed, self.frames)
@@ -199,7 +199,7 @@ class SequenceSpec:
             frames, gt = self.video, read_mot(self.gt)
         if self.frames is not None:
             if self.scene is None:
-                from belief_tracking.video import VideoReader
+                from .video import VideoReader
 
                 with contextlib.closing(VideoReader(self.video)) as reader:
                     frames = np.stack([image for _, image in zip(range(self.frames), reader)])
@@ -224,17 +224,17 @@ class SequenceSpec:
             or wholly outside the image (:func:`~belief_tracking.detections.read_detections`;
             the message names the file).
         """
-        from belief_tracking.detections import read_detections
+        from .detections import read_detections
 
         if self.detections is None:
             return None
         if self.scene is not None:
-            from belief_tracking import scenes
+            from . import scenes
 
             config = scenes.PRESETS[self.scene](self.scene_seed)
             frame_count, size = config.n_frames, (config.width, config.height)
         else:
-            from belief_tracking.video import VideoReader
+            from .video import VideoReader
 
             with contextlib.closing(VideoReader(self.video)) as reader:
                 frame_count, size = reader.frame_count, (reader.width, reader.height)
@@ -259,7 +259,7 @@ def _rendered(name: str, seed: int, frames: int | None):
     A scene cut to its first frames is rendered to that length only: a shorter scene begins
     with exactly the frames of a longer one.
     """
-    from belief_tracking import scenes
+    from . import scenes
 
     config = scenes.PRESETS[name](seed)
     if frames is not None and frames < config.n_frames:
@@ -558,7 +558,7 @@ def _grid_methods(grid: Any) -> list[MethodSpec]:
                     options["fusion"] = fusion
                     parts.append(str(fusion))
                 if rule is not None:
-                    options["rule"] = rule
+                    options["belief"] = {"rule": rule}
                     parts.append(str(rule))
                 if cues is not None:
                     options["cues"] = list(cues)
@@ -583,7 +583,7 @@ def _check_keys(mapping: Mapping[str, Any], known: Sequence[str], where: str) ->
 
 
 def _check_tracker_keys(options: Mapping[str, Any], where: str) -> None:
-    from belief_tracking.config import TrackerConfig
+    from .config import TrackerConfig
 
     known = [f.name for f in fields(TrackerConfig)]
     _check_keys(options, known, f"{where} (TrackerConfig settings)")
@@ -617,7 +617,7 @@ def _thaw(options: tuple[tuple[str, Any], ...]) -> dict[str, Any]:
 
 def _tracker_config(settings: Mapping[str, Any], where: str):
     """Build a TrackerConfig; nested tables fill the nested settings dataclasses."""
-    from belief_tracking.config import TrackerConfig
+    from .config import TrackerConfig
 
     try:
         return TrackerConfig.from_settings(settings, where)

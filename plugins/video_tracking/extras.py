@@ -19,7 +19,7 @@ import importlib
 import os
 from types import ModuleType
 
-from belief_tracking.errors import MissingExtraError
+from .errors import MissingExtraError
 
 __all__ = ["require", "EXTRA", "INSTALL"]
 

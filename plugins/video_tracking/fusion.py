@@ -25,8 +25,8 @@ import numpy as np
 from belief import MassBatch, Model, combine, inconsistency
 from belief.errors import BeliefError
 from belief.rules import EMPTY_MODES, R_MODES, get_rule
-from belief_tracking import checks
-from belief_tracking.errors import TrackingError
+from . import checks
+from .errors import TrackingError
 
 __all__ = ["FusionConfig", "CueFusion", "FusionResult", "cue_masses", "relative_likelihoods", "WEIGHTS", "MASSES"]
 

@@ -21,12 +21,12 @@ from typing import Any
 
 import numpy as np
 
-from belief_tracking.errors import TrackingError
-from belief_tracking.executors import executor, outcomes, runs_here
-from belief_tracking.experiment import CELL_FORMAT, Experiment, ExperimentError
-from belief_tracking.extras import require
-from belief_tracking.runs import run_cell
-from belief_tracking.tables import (
+from .errors import TrackingError
+from .executors import executor, outcomes, runs_here
+from .experiment import CELL_FORMAT, Experiment, ExperimentError
+from .extras import require
+from .runs import run_cell
+from .tables import (
     RESULT_COLUMNS,
     RMS_COLUMNS,
     rms_per_frame,

@@ -35,11 +35,11 @@ from os import PathLike
 import numpy as np
 
 from belief.textfiles import read_text
-from belief_tracking import checks
-from belief_tracking.boxes import check_boxes, pixel_ranges
-from belief_tracking.errors import InitError, TrackingError
-from belief_tracking.extras import require
-from belief_tracking.motfiles import MAX_COORDINATE, MAX_FRAME, MAX_ID, check_box, check_frame, read_mot
+from . import checks
+from .boxes import check_boxes, pixel_ranges
+from .errors import InitError, TrackingError
+from .extras import require
+from .motfiles import MAX_COORDINATE, MAX_FRAME, MAX_ID, check_box, check_frame, read_mot
 
 __all__ = [
     "TargetInit",

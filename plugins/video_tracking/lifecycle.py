@@ -30,9 +30,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from belief_tracking.association import UNASSIGNED
-from belief_tracking.boxes import box_centres, intersections, iou
-from belief_tracking.initiation import COVERED_FRACTION, InitiationConfig, foreground_fraction
+from .association import UNASSIGNED
+from .boxes import box_centres, intersections, iou
+from .initiation import COVERED_FRACTION, InitiationConfig, foreground_fraction
 
 __all__ = ["Lifecycle", "FrameOutcome", "DUPLICATE_INSIDE"]
 

@@ -19,7 +19,7 @@ from os import PathLike
 import numpy as np
 
 from belief.textfiles import read_text
-from belief_tracking.errors import TrackFileError
+from .errors import TrackFileError
 
 __all__ = ["MOT_COLUMNS", "MAX_FRAME", "MAX_ID", "MAX_COORDINATE", "read_mot", "write_tracks", "text_lines",
            "check_frame", "check_box"]

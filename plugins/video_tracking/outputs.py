@@ -26,8 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from belief_tracking.errors import TrackingError
-from belief_tracking.extras import require
+from .errors import TrackingError
+from .extras import require
 
 __all__ = ["StagedOutputs", "RUN_OUTPUTS", "write_diagnostics", "write_summary", "plot_diagnostics"]
 

@@ -46,7 +46,7 @@ from typing import Optional, Protocol
 
 import numpy as np
 
-from belief_tracking.errors import TrackingError
+from .errors import TrackingError
 
 __all__ = [
     "STATE",

@@ -27,9 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from belief_tracking.boxes import check_boxes
-from belief_tracking import checks
-from belief_tracking.errors import TrackingError
+from .boxes import check_boxes
+from . import checks
+from .errors import TrackingError
 
 __all__ = ["PerspectiveScale", "PersonSize", "MAX_SCALE_CHANGE"]
 

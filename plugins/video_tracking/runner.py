@@ -15,15 +15,15 @@ from os import PathLike
 
 import numpy as np
 
-from belief_tracking import outputs
-from belief_tracking.config import TrackerConfig
-from belief_tracking.detections import Detections, check_detections
-from belief_tracking.errors import DetectionFileError, InitError, TrackingError
-from belief_tracking.extras import require
-from belief_tracking.initiation import InitPlan
-from belief_tracking.motfiles import read_mot, write_tracks
-from belief_tracking.sources import open_source
-from belief_tracking.tracker import Tracker
+from . import outputs
+from .config import TrackerConfig
+from .detections import Detections, check_detections
+from .errors import DetectionFileError, InitError, TrackingError
+from .extras import require
+from .initiation import InitPlan
+from .motfiles import read_mot, write_tracks
+from .sources import open_source
+from .tracker import Tracker
 
 __all__ = ["Summary", "run"]
 
@@ -133,8 +133,8 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
     tqdm = require("tqdm").tqdm
 
     from belief import __version__
-    from belief_tracking.evaluation import evaluate
-    from belief_tracking.video import AnnotatedVideoWriter
+    from .evaluation import evaluate
+    from .video import AnnotatedVideoWriter
 
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise TrackingError(f"the seed must be a non-negative integer, got {seed!r}")

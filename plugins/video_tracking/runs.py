@@ -18,12 +18,12 @@ from typing import Any
 
 import numpy as np
 
-from belief_tracking.errors import VideoError
-from belief_tracking.evaluation import evaluate, matched_pairs
-from belief_tracking.experiment import CELL_FORMAT, Cell
-from belief_tracking.initiation import init_from_gt
-from belief_tracking.sources import open_source
-from belief_tracking.tracker import Tracker
+from .errors import VideoError
+from .evaluation import evaluate, matched_pairs
+from .experiment import CELL_FORMAT, Cell
+from .initiation import init_from_gt
+from .sources import open_source
+from .tracker import Tracker
 
 __all__ = ["run_cell", "CURVE_COLUMNS"]
 
@@ -89,7 +89,7 @@ def run_cell(cell: Cell) -> dict[str, Any]:
     row = {
         "sequence": cell.sequence.name,
         "method": cell.method.name,
-        "rule": config.rule if config.fusion == "belief" else "",
+        "rule": config.belief.rule if config.fusion == "belief" else "",
         "fusion": config.fusion,
         "cues": "+".join(config.cues),
         "seed": cell.seed,

@@ -44,8 +44,8 @@ from pathlib import Path
 
 import numpy as np
 
-from belief_tracking.errors import TrackingError
-from belief_tracking.extras import require
+from .errors import TrackingError
+from .extras import require
 
 __all__ = [
     "Walker",

@@ -57,7 +57,7 @@ from pathlib import Path
 
 import numpy as np
 
-from belief_tracking.errors import TrackingError, VideoError
+from .errors import TrackingError, VideoError
 
 __all__ = ["FrameSource", "open_source", "IMAGE_EXTENSIONS"]
 
@@ -124,7 +124,7 @@ class FrameSource:
         if self._path is None:
             frames = self._frames
             return (frames[k] for k in sorted(picks) if k < len(frames))  # type: ignore[index]
-        from belief_tracking.video import VideoReader
+        from .video import VideoReader
 
         path = self._path
 
@@ -208,7 +208,7 @@ def open_source(source) -> FrameSource:
             return _image_folder(path)
         if not path.exists() and "%" in text:
             return _pattern(text)
-        from belief_tracking.video import VideoReader
+        from .video import VideoReader
 
         reader = VideoReader(source)
         return FrameSource(reader, name=text, width=reader.width, height=reader.height, fps=reader.fps,
@@ -224,7 +224,7 @@ def open_source(source) -> FrameSource:
 
 def _images(files: Sequence[Path | str], name: str, kind: str, fps: float = 25.0,
             size: tuple[int, int] | None = None) -> FrameSource:
-    from belief_tracking.video import ImageSequenceReader
+    from .video import ImageSequenceReader
 
     reader = ImageSequenceReader(files, name=name, fps=fps, size=size)
 

@@ -37,19 +37,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from belief_tracking.appearance import AppearanceFollower
-from belief_tracking.association import UNASSIGNED, assign, contested_pairs
-from belief_tracking.background import BackgroundModel
-from belief_tracking.blobs import box_mask
-from belief_tracking.candidates import BlobCandidates
-from belief_tracking.config import TrackerConfig
-from belief_tracking.cues import CUES, AppearanceCue, Observation, score_cues, template_similarity
-from belief_tracking.detections import Detections, check_rows
-from belief_tracking.errors import InitError, TrackingError
-from belief_tracking.initiation import InitPlan
-from belief_tracking.particles import CX, CY, LOG_SCALE, VX, VY, ConstantVelocity, ParticleSet, adaptive_count
-from belief_tracking.tracks import Estimate, TrackManager
-from belief_tracking.weighting import BELIEF_COLUMNS, Evidence, Weighing, make_weighting
+from .appearance import AppearanceFollower
+from .association import UNASSIGNED, assign, contested_pairs
+from .background import BackgroundModel
+from .blobs import box_mask
+from .candidates import BlobCandidates
+from .config import TrackerConfig
+from .cues import CUES, AppearanceCue, Observation, score_cues, template_similarity
+from .detections import Detections, check_rows
+from .errors import InitError, TrackingError
+from .initiation import InitPlan
+from .particles import CX, CY, LOG_SCALE, VX, VY, ConstantVelocity, ParticleSet, adaptive_count
+from .tracks import Estimate, TrackManager
+from .weighting import BELIEF_COLUMNS, Evidence, Weighing, make_weighting
 
 __all__ = ["Tracker", "FrameResult", "FrameDiagnostics", "Estimate", "diagnostic_columns"]
 

@@ -23,15 +23,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from belief_tracking.boxes import check_boxes
-from belief_tracking.config import TrackerConfig
-from belief_tracking.association import UNASSIGNED
-from belief_tracking.cues import AppearanceCue, bhattacharyya
-from belief_tracking.errors import InitError, TrackingError
-from belief_tracking.initiation import InitPlan, TargetInit
-from belief_tracking.lifecycle import Lifecycle
-from belief_tracking.particles import CX, CY, LOG_SCALE, VX, VY, ParticleSet, initialise
-from belief_tracking.perspective import PerspectiveScale
+from .boxes import check_boxes
+from .config import TrackerConfig
+from .association import UNASSIGNED
+from .cues import AppearanceCue, bhattacharyya
+from .errors import InitError, TrackingError
+from .initiation import InitPlan, TargetInit
+from .lifecycle import Lifecycle
+from .particles import CX, CY, LOG_SCALE, VX, VY, ParticleSet, initialise
+from .perspective import PerspectiveScale
 
 __all__ = ["Estimate", "Target", "TrackManager"]
 

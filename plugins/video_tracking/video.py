@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from belief_tracking.errors import VideoError
-from belief_tracking.extras import require
+from .errors import VideoError
+from .extras import require
 
 cv2 = require("cv2")
 

@@ -37,10 +37,10 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
-from belief_tracking.fusion import CueFusion, FusionConfig
+from .fusion import CueFusion, FusionConfig
 
 if TYPE_CHECKING:
-    from belief_tracking.config import TrackerConfig
+    from .config import TrackerConfig
 
 __all__ = ["Evidence", "Weighing", "Weighting", "BeliefWeighting", "SumWeighting", "ProductWeighting",
            "WEIGHTINGS", "make_weighting", "target_means", "BELIEF_COLUMNS"]
@@ -209,11 +209,11 @@ class ProductWeighting:
 
 
 def _belief(config: "TrackerConfig", rng: np.random.Generator) -> BeliefWeighting:
-    return BeliefWeighting(config.fusion_config())
+    return BeliefWeighting(config.belief)
 
 
 def _adaptive(config: "TrackerConfig", rng: np.random.Generator):
-    from belief_tracking.adaptive import AdaptiveWeighting
+    from .adaptive import AdaptiveWeighting
 
     return AdaptiveWeighting(config.adaptive_fusion, config.cues, rng)
 

@@ -183,7 +183,8 @@ def test_a_bad_flag_value_is_a_one_line_command_line_error(tmp_path, capsys, fla
     assert not (tmp_path / "o").exists()
 
 
-@pytest.mark.parametrize("setting, message", [("masses=absolute", "TrackerConfig.masses must be one of"),
+@pytest.mark.parametrize("setting, message", [("belief.masses=absolute", "FusionConfig.masses must be one of"),
+                                              ("masses=normalised", "masses is a setting of the belief table: belief.masses"),
                                               ("location.sigmaa=3", "unknown key 'sigmaa'"),
                                               ("novalue", "--set takes KEY=VALUE")])
 def test_a_bad_setting_is_a_one_line_error(tmp_path, capsys, setting, message):
@@ -200,10 +201,10 @@ def test_every_setting_is_reachable_from_the_command_line(tmp_path):
     boxes.write_text("1,21,11,10,20\n")
     out = tmp_path / "out"
     assert track([str(video), "--init", str(boxes), "--out", str(out), "--no-video", "--no-progress",
-                  "--set", "masses=normalised", "--set", "adaptive_fusion.mix_norm='raw'", "--set", "particles=12",
+                  "--set", "belief.masses=normalised", "--set", "adaptive_fusion.mix_norm='raw'", "--set", "particles=12",
                   "--set", "colour.bins=4", "--template-update", "--diagnostics", "all"]) == 0
     parameters = json.loads((out / "summary.json").read_text())["parameters"]
-    assert parameters["masses"] == "normalised" and parameters["adaptive_fusion"]["mix_norm"] == "raw"
+    assert parameters["belief"]["masses"] == "normalised" and parameters["adaptive_fusion"]["mix_norm"] == "raw"
     assert parameters["particles"] == 12 and parameters["colour"]["bins"] == 4
     assert parameters["template_update"] is True and parameters["diagnostics"] == "all"
 

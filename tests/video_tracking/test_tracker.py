@@ -9,6 +9,7 @@ import pytest
 
 from belief_tracking import scenes
 from belief_tracking.config import TrackerConfig
+from belief_tracking.fusion import FusionConfig
 from belief_tracking.errors import InitError, TrackingError, UnknownCueError
 from belief_tracking.evaluation import evaluate
 from belief_tracking.initiation import InitPlan, TargetInit, init_from_boxes, init_from_gt, read_init_boxes
@@ -42,7 +43,7 @@ def crossing_scene(rendered_scene):
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_crossing_with_full_occlusion_keeps_identities(crossing_scene, seed):
     config = TrackerConfig(particles=40, cues=("colour", "location"))
-    assert config.rule == "r_rule"
+    assert config.belief.rule == "r_rule"
     rows, _, _ = track(crossing_scene, config, seed=seed)
     scores = evaluate(crossing_scene.ground_truth, rows)
     assert scores.id_switches == 0
@@ -115,7 +116,7 @@ def test_newborn_output_is_its_box():
 def test_other_rules_run(crossing_scene, rule):
     short = crossing_scene.frames[:4]
     plan = init_from_gt(crossing_scene.ground_truth)
-    tracker = Tracker(TrackerConfig(particles=20, rule=rule), plan, np.random.default_rng(0))
+    tracker = Tracker(TrackerConfig(particles=20, belief=FusionConfig(rule=rule)), plan, np.random.default_rng(0))
     for result in tracker.track(short):
         for e in result.estimates:
             assert np.isfinite(e.state).all()
@@ -125,11 +126,11 @@ def test_config_rejects_bad_settings():
     with pytest.raises(UnknownCueError, match="sound"):
         TrackerConfig(cues=("colour", "sound"))
     with pytest.raises(TrackingError, match="no_such_rule"):
-        TrackerConfig(rule="no_such_rule")
+        TrackerConfig(belief=FusionConfig(rule="no_such_rule"))
     with pytest.raises(TrackingError, match="twice"):
         TrackerConfig(cues=("colour", "colour"))
     with pytest.raises(TrackingError):
-        TrackerConfig(weight="max")
+        FusionConfig(weight="max")
     with pytest.raises(TrackingError):
         TrackerConfig(particles=0)
 

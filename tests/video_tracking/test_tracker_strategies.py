@@ -213,7 +213,7 @@ def test_strategies_weigh_particles_differently(rendered_scene):
     ({"initiation": {"border": 5}}, "TrackerConfig.initiation must be an InitiationConfig"),
     ({"adaptive_fusion": {"threshold": 0.5}}, "TrackerConfig.adaptive_fusion must be an AdaptiveConfig"),
     ({"diagnostics": "some"}, "TrackerConfig.diagnostics must be one of strategy, all"),
-    ({"masses": "absolute"}, "TrackerConfig.masses must be one of relative, normalised"),
+    ({"belief": "absolute"}, "TrackerConfig.belief must be a FusionConfig"),
 ])
 def test_bad_settings_name_the_field(kwargs, message):
     with pytest.raises(TrackingError, match=message.replace("(", r"\(").replace(")", r"\)")):

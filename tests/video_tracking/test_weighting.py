@@ -136,4 +136,4 @@ def test_tracker_sizes_windows_by_perspective_once_two_rows_are_known():
     assert single.tracks.perspective is None
     assert all(e.state[4] == 0.0 and e.box[2:] == (10.0, 30.0) for e in single.step(2, image).estimates)
     with pytest.raises(TrackingError, match="masses must be one of"):
-        TrackerConfig(masses="odd")
+        TrackerConfig(belief=FusionConfig(masses="odd"))
