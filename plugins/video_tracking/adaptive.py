@@ -61,11 +61,13 @@ import numpy as np
 from . import checks
 from .errors import TrackingError
 from .particles import DegenerateWeightsWarning, systematic
-from .weighting import Evidence, Weighing
+from .evidence import Evidence, Weighing
 
 __all__ = [
     "AdaptiveConfig",
     "AdaptiveWeighting",
+    "SumWeighting",
+    "ProductWeighting",
     "MIX_NORMS",
     "feature_spreads",
     "feature_entropies",
@@ -359,6 +361,12 @@ def feature_spreads(
     if not isinstance(rng, np.random.Generator):
         raise TrackingError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
 
+    return _spreads(positions, log_p, owner, n_targets, counts, rng, keep, epsilon)
+
+
+def _spreads(positions: np.ndarray, log_p: np.ndarray, owner: np.ndarray, n_targets: int, counts: np.ndarray,
+             rng: np.random.Generator, keep: float, epsilon: float) -> np.ndarray:
+    """:func:`feature_spreads` of checked inputs, with each target's particle count."""
     weights = np.exp(_feature_log_weights(log_p, owner, n_targets, counts))
     spreads = np.empty((n_targets, log_p.shape[1]))
     for target, members in enumerate(_groups(owner, counts)):
@@ -411,6 +419,11 @@ def feature_entropies(log_p: np.ndarray, owner: np.ndarray, n_targets: int) -> n
     """
     log_p = _log_likelihoods(log_p)
     owner, counts, n_targets = _owner(owner, log_p.shape[0], n_targets)
+    return _entropies(log_p, owner, n_targets, counts)
+
+
+def _entropies(log_p: np.ndarray, owner: np.ndarray, n_targets: int, counts: np.ndarray) -> np.ndarray:
+    """:func:`feature_entropies` of checked inputs, with each target's particle count."""
     log_w = _feature_log_weights(log_p, owner, n_targets, counts)
     # 0·log 0 = 0: w̃ = 0 exactly where log w̃ = −inf, or where it underflows.
     terms = np.exp(log_w) * np.where(np.isfinite(log_w), log_w, 0.0) / math.log(2.0)
@@ -457,7 +470,11 @@ def feature_confidences(spreads: np.ndarray, entropies: np.ndarray, epsilon: flo
         raise TrackingError(f"spreads must have shape (τ, c), got {spreads.shape}")
     spreads = _per_target("spreads", spreads, spreads.shape[0])
     entropies = _per_target("entropies", entropies, spreads.shape[0], spreads.shape[1])
-    epsilon = _epsilon("epsilon", epsilon)
+    return _confidences(spreads, entropies, _epsilon("epsilon", epsilon))
+
+
+def _confidences(spreads: np.ndarray, entropies: np.ndarray, epsilon: float) -> np.ndarray:
+    """:func:`feature_confidences` of checked inputs."""
     index = 1.0 / (spreads * entropies + epsilon)   # h_i ∈ (0, 1/ε]
     return index / index.sum(axis=1, keepdims=True)
 
@@ -604,11 +621,17 @@ def fuse_adaptive(
     """
     log_p = _log_likelihoods(log_p)
     owner, counts, n_targets = _owner(owner, log_p.shape[0], n_targets)
-    lam = _confidence_rows("lam", lam, n_targets, log_p.shape[1])
+    _confidence_rows("lam", lam, n_targets, log_p.shape[1])
     rho = _similarities("rho_prev", rho_prev, n_targets)
     if mix_norm not in MIX_NORMS:
         raise TrackingError(f"mix_norm must be one of {', '.join(MIX_NORMS)}, got {mix_norm!r}")
+    return _mix(log_p, owner, n_targets, counts, _float_array("lam", lam), rho, mix_norm)
 
+
+def _mix(log_p: np.ndarray, owner: np.ndarray, n_targets: int, counts: np.ndarray, lam: np.ndarray,
+         rho: np.ndarray, mix_norm: str) -> np.ndarray:
+    """:func:`fuse_adaptive` of checked inputs; ``lam`` non-negative, rows with some weight."""
+    lam = lam / lam.sum(axis=1)[:, None]                                               # each row sums to 1
     terms = np.stack([log_p.sum(axis=1), _log_sum_term(log_p, owner, lam)], axis=1)   # (P, 2): product, sum
     if mix_norm == "per_term":
         terms, empty = _normalise_within(terms, owner, n_targets, counts)
@@ -827,12 +850,48 @@ class AdaptiveWeighting:
 
     def weigh(self, evidence: Evidence) -> Weighing:
         config, tau = self.config, evidence.n_targets
-        own, owner = evidence.own, evidence.owner
-        spreads = feature_spreads(evidence.positions, own, owner, tau, self.rng, keep=config.keep,
-                                  epsilon=config.epsilon)                                     # C (11)
-        confidences = feature_confidences(spreads, feature_entropies(own, owner, tau),
-                                          epsilon=config.epsilon)                             # C (12)–(13)
+        own, owner, counts = evidence.own, evidence.owner, evidence.counts
+        # The evidence comes checked from the tracker: the kernels, not the checked functions.
+        spreads = _spreads(evidence.positions, own, owner, tau, counts, self.rng, config.keep, config.epsilon)  # C (11)
+        confidences = _confidences(spreads, _entropies(own, owner, tau, counts), config.epsilon)   # C (12)–(13)
         previous = evidence.similarity if evidence.similarity is not None else np.full(tau, config.rho0)
-        log_weights = fuse_adaptive(own, owner, tau, confidences, previous, mix_norm=config.mix_norm)  # C (14)
+        log_weights = _mix(own, owner, tau, counts, confidences, np.asarray(previous, dtype=np.float64),
+                           config.mix_norm)                                                       # C (14)
         diagnostics = {column: confidences[:, k] for k, column in enumerate(self.columns)}
         return Weighing(log_weights, diagnostics, confidences)
+
+
+class SumWeighting:
+    """Equal-weight sum of the cues' own-target likelihoods: log Σ_i p_i / c (the sum term of C (14)).
+
+    >>> scores = (np.log([[0.5, 0.1]]), np.log([[0.1, 0.1]]))
+    >>> np.exp(SumWeighting().weigh(Evidence(scores, np.array([0]), np.zeros((1, 2)))).log_weights).round(12)
+    array([0.3])
+    """
+
+    columns: tuple[str, ...] = ()
+
+    def __repr__(self) -> str:
+        return "SumWeighting()"
+
+    def weigh(self, evidence: Evidence) -> Weighing:
+        own = evidence.own
+        return Weighing(_log_sum_term(own, evidence.owner, np.full((evidence.n_targets, own.shape[1]),
+                                                                   1.0 / own.shape[1])))
+
+
+class ProductWeighting:
+    """Product of the cues' own-target likelihoods: Σ_i log p_i (the product term of C (14)).
+
+    >>> scores = (np.log([[0.5, 0.1]]), np.log([[0.2, 0.1]]))
+    >>> np.exp(ProductWeighting().weigh(Evidence(scores, np.array([0]), np.zeros((1, 2)))).log_weights).round(12)
+    array([0.1])
+    """
+
+    columns: tuple[str, ...] = ()
+
+    def __repr__(self) -> str:
+        return "ProductWeighting()"
+
+    def weigh(self, evidence: Evidence) -> Weighing:
+        return Weighing(evidence.own.sum(axis=1))

@@ -1,28 +1,32 @@
-"""How well each target still looks like its templates: total similarity, occlusion and template update.
+"""How well each track still looks like its templates: total similarity, occlusion and template update.
 
-After the estimate of a frame (C's algorithm, step 5; SPEC B.5):
+After the estimate of a frame (C's algorithm, step 5; SPEC B.5), :class:`AppearanceFollower`
+computes, for every track of the store:
 
-* the total similarity ρ_t = Σ_i λ_i ρ[p_i(x̂_t), q̂_{i,t−1}] of every target's appearance
-  cues at its estimate (C (9), C (15)), with the confidences λ of the weighting strategy
-  renormalised over the appearance cues, or equal weights when the strategy has none;
+* the total similarity ρ_t = Σ_i λ_i ρ[p_i(x̂_t), q̂_{i,t−1}] of its appearance cues at its
+  estimate (C (9), C (15)), with the confidences λ of the weighting strategy renormalised
+  over the appearance cues, or equal weights when the strategy has none;
 * the occlusion flag ρ_t < T;
-* when the templates follow their targets, the update of C (16), frozen while a target is
+* when the templates follow their tracks, the update of C (16), frozen while a track is
   occluded.
 
-:class:`AppearanceFollower` keeps ρ_t per target id: it is the ρ_{t−1} that C's adaptive
-fusion (C (14)) reads the next frame, and the only place where that state lives.
+ρ_t goes into the track's record (:attr:`~belief_tracking.store.Track.similarity`): it is
+the ρ_{t−1} that C's adaptive fusion (C (14)) reads the next frame.  The templates, current
+and initial, are the track's too (:attr:`~belief_tracking.store.Track.templates`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 
-from .adaptive import AdaptiveConfig, occluded, total_similarity
+from .adaptive import AdaptiveConfig, occluded, total_similarity, update_templates
 from .cues import AppearanceCue, Observation
+from .store import Track
 
-__all__ = ["AppearanceFollower", "row_similarity"]
+__all__ = ["AppearanceFollower", "Appearance", "row_similarity", "stacked_templates"]
 
 
 def row_similarity(histograms: np.ndarray, templates: np.ndarray) -> np.ndarray:
@@ -34,79 +38,112 @@ def row_similarity(histograms: np.ndarray, templates: np.ndarray) -> np.ndarray:
     return np.clip(np.sqrt(np.maximum(histograms, 0.0) * templates).sum(axis=1), 0.0, 1.0)
 
 
+def stacked_templates(tracks: Sequence[Track], cues: Sequence[AppearanceCue],
+                      initial: bool = False) -> dict[str, np.ndarray]:
+    """The tracks' current (or ``initial``) templates of each cue, stacked, shape (τ, B) by cue name.
+
+    >>> track = Track.born(1, (0, 0, 4, 8), np.zeros((2, 5)), {"colour": np.array([0.5, 0.5])})
+    >>> from belief_tracking.cues import ColourCue
+    >>> stacked_templates([track, track], [ColourCue()])["colour"].tolist()
+    [[0.5, 0.5], [0.5, 0.5]]
+    """
+    return {cue.name: np.stack([(t.initial_templates if initial else t.templates)[cue.name] for t in tracks])
+            for cue in cues}
+
+
+class Appearance(NamedTuple):
+    """The appearance of every track at its new estimate.
+
+    Attributes
+    ----------
+    similarity : ndarray, shape (τ,)
+        ρ_t (C (15)); 1 without appearance cues.
+    occluded : ndarray of bool, shape (τ,)
+        ρ_t < T.
+    """
+
+    similarity: np.ndarray
+    occluded: np.ndarray
+
+
 class AppearanceFollower:
     """Total similarity at the estimates (C (15)), occlusion flags and the template update (C (16)).
 
     Parameters
     ----------
     config : AdaptiveConfig
-        ρ_0 of a new target, the threshold T and the update's settings.
+        The threshold T of the occlusion test.
     cues : sequence
-        The tracker's cues; the appearance cues among them are followed.
+        The tracker's cues, in fusion order; the appearance cues among them are followed.
     update : bool
         Update the templates by C (16) (frozen under occlusion).
 
     Examples
     --------
-    A target whose window shows exactly its template has ρ_t = 1 and is not occluded:
+    A track whose window shows exactly its template has ρ_t = 1 and is not occluded:
 
-    >>> from belief_tracking.cues import ColourCue, ColourConfig, Observation
+    >>> from belief_tracking.cues import ColourCue, ColourConfig
     >>> image = np.full((60, 80, 3), 128, np.uint8)
     >>> cue = ColourCue(ColourConfig(samples=(6, 12)))
-    >>> cue.set_templates(image, np.array([[30, 20, 10, 20]]))
+    >>> box = (30, 20, 10, 20)
+    >>> track = Track.born(7, box, np.zeros((3, 5)), {"colour": cue.build_templates(image, [box])[0]})
     >>> follower = AppearanceFollower(AdaptiveConfig(), [cue], update=False)
-    >>> obs = Observation(image, None, [[35.0, 30.0]], [[10.0, 20.0]], np.zeros((0, 2)))
-    >>> similarity, flags = follower.follow(obs, np.array([[35.0, 30.0, 0, 0, 0]]), [7])
-    >>> similarity.round(12).tolist(), flags.tolist(), follower.similarity([7, 8]).round(12).tolist()
-    ([1.0], [False], [1.0, 0.8])
+    >>> obs = Observation(image, None, [[35.0, 30.0]], [[10.0, 20.0]], np.zeros((0, 2)),
+    ...                   templates=stacked_templates([track], [cue]))
+    >>> appearance = follower.follow(obs, [track])
+    >>> appearance.similarity.round(12).tolist(), appearance.occluded.tolist(), round(track.similarity, 12)
+    ([1.0], [False], 1.0)
     """
 
     def __init__(self, config: AdaptiveConfig, cues: Sequence, update: bool) -> None:
         self.config = config
-        self.cues = list(cues)
         self.update = bool(update)
+        self.cues = list(cues)
         self._columns = [k for k, cue in enumerate(self.cues) if isinstance(cue, AppearanceCue)]
-        self._similarity: dict[int, float] = {}
 
-    def similarity(self, ids: Sequence[int]) -> np.ndarray:
-        """ρ_{t−1} of the targets ``ids`` (ρ_0 for a target not followed yet), shape (τ,)."""
-        return np.array([self._similarity.get(int(i), self.config.rho0) for i in ids], dtype=np.float64)
-
-    def follow(self, obs: Observation, estimates: np.ndarray, ids: Sequence[int],
-               confidences: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """ρ_t and the occlusion flags of every target at its new estimate; C (16) when updating.
+    def follow(self, obs: Observation, tracks: Sequence[Track], confidences: np.ndarray | None = None) -> Appearance:
+        """ρ_t and the occlusion flags of every track at its new estimate; C (16) when updating.
 
         Parameters
         ----------
         obs : Observation
-            The frame the estimates belong to.
-        estimates : ndarray, shape (τ, 5)
-            The estimated states (W (6)), in the cues' target order.
-        ids : sequence of int
-            The targets' ids, in the same order.
+            The frame the estimates belong to, with the tracks' templates before the update.
+        tracks : sequence of Track
+            The tracks, in the observation's order; their estimates are this frame's (W (6)).
+            Each track's ``similarity`` becomes its ρ_t, and its templates are updated.
         confidences : ndarray, shape (τ, c), optional
             The weighting strategy's confidences λ (C (13)), one column per cue.
 
         Returns
         -------
-        similarity : ndarray, shape (τ,)
-            ρ_t (C (15)); 1 without appearance cues.
-        occluded : ndarray of bool, shape (τ,)
-            ρ_t < T.
+        Appearance
         """
-        tau = len(ids)
+        tau = len(tracks)
         if not self._columns:
             similarity, flags = np.ones(tau), np.zeros(tau, dtype=bool)
         else:
-            index = np.arange(tau)
-            current = [self.cues[k].histograms(obs, estimates, index) for k in self._columns]     # each (τ, B)
-            rho = np.stack([row_similarity(p, self.cues[k].templates) for p, k in zip(current, self._columns)],
-                           axis=1)
-            weights = np.ones((tau, len(self._columns))) if confidences is None else confidences[:, self._columns]
+            states, index = np.array([t.estimate for t in tracks]), np.arange(tau)
+            cues = [self.cues[k] for k in self._columns]
+            current = [cue.histograms(obs, states, index) for cue in cues]                      # each (τ, B)
+            rho = np.stack([row_similarity(p, obs.templates_of(cue.name)) for p, cue in zip(current, cues)], axis=1)
+            weights = np.ones((tau, len(cues))) if confidences is None else confidences[:, self._columns]
             similarity = total_similarity(weights, rho)
             flags = occluded(similarity, self.config.threshold)
             if self.update:
-                for p, k in zip(current, self._columns):
-                    self.cues[k].follow_appearance(p, flags)
-        self._similarity = {int(i): float(s) for i, s in zip(ids, similarity)}
-        return similarity, flags
+                self._update(obs, tracks, cues, current, flags)
+        for track, value in zip(tracks, similarity):
+            track.similarity = float(value)
+        return Appearance(similarity, flags)
+
+    @staticmethod
+    def _update(obs: Observation, tracks: Sequence[Track], cues: list, current: list[np.ndarray],
+                frozen: np.ndarray) -> None:
+        """Let every template follow its track's current appearance, frozen under occlusion (C (16))."""
+        initial = stacked_templates(tracks, cues, initial=True)
+        for cue, observed in zip(cues, current):
+            updated = update_templates(initial[cue.name], obs.templates_of(cue.name), observed, frozen)
+            totals = updated.sum(axis=1, keepdims=True)
+            # Rows summing to 1 up to rounding are normalised once more, as every template is.
+            updated = np.divide(updated, totals, out=updated, where=totals > 0)
+            for track, row in zip(tracks, updated):
+                track.templates[cue.name] = row

@@ -20,11 +20,16 @@ import math
 
 import numpy as np
 
+from collections.abc import Sequence
+
 from . import checks
 from .boxes import check_boxes, iou
+from .cues import Observation, template_similarity
 from .errors import TrackingError
+from .initiation import InitiationConfig
+from .particles import CX, CY, STATE_DIM
 
-__all__ = ["assign", "contested_pairs", "min_cost_assignment", "UNASSIGNED"]
+__all__ = ["assign", "contested_pairs", "min_cost_assignment", "UNASSIGNED", "Association"]
 
 #: The assignment of a track that takes no candidate.
 UNASSIGNED = -1
@@ -230,3 +235,63 @@ def min_cost_assignment(cost) -> tuple[np.ndarray, np.ndarray]:
         rows, columns = columns, rows
     order = np.argsort(rows)
     return rows[order].astype(np.intp), columns[order].astype(np.intp)
+
+
+class Association:
+    """The association stage: the candidate each track takes this frame, −1 for none (:func:`assign`).
+
+    Detections are weighed by appearance too (``InitiationConfig.appearance_weight``): ρ of
+    the window of each track's size at each detection's centre with the track's templates,
+    formed only for :func:`contested_pairs`, where it can change the matching.  Foreground
+    blobs go by overlap alone.
+
+    Parameters
+    ----------
+    initiation : InitiationConfig or None
+        The gate ``match_iou`` and ``appearance_weight`` (without an initiation: a gate of
+        0.3 and overlap alone).
+    appearance_cues : sequence of AppearanceCue
+        The cues whose templates the likeness reads.
+
+    Examples
+    --------
+    >>> association = Association(InitiationConfig(), [])
+    >>> obs = Observation(np.zeros((40, 60, 3), np.uint8), None, [[15.0, 20.0]], [[10.0, 20.0]], np.zeros((0, 2)))
+    >>> association(obs, np.array([[10.0, 10, 10, 20]]), np.array([[40.0, 10, 10, 20, 1], [11.0, 10, 10, 20, 1]]),
+    ...             detector=True).tolist()
+    [1]
+    """
+
+    def __init__(self, initiation: InitiationConfig | None, appearance_cues: Sequence) -> None:
+        self.gate = initiation.match_iou if initiation is not None else 0.3
+        self.weight = initiation.appearance_weight if initiation is not None else 0.0
+        self.appearance_cues = list(appearance_cues)
+
+    def __call__(self, obs: Observation, predicted: np.ndarray, candidates: np.ndarray | None,
+                 detector: bool) -> np.ndarray | None:
+        """The candidate row each track takes, shape (τ,); None without candidates.
+
+        Parameters
+        ----------
+        obs : Observation
+            The frame, with the tracks' templates.
+        predicted : ndarray, shape (τ, 4)
+            Each track's box moved on by its velocity.
+        candidates : ndarray, shape (n, 5), or None
+            ``x, y, w, h, score``.
+        detector : bool
+            Whether the candidates are detections (weighed by appearance) or blobs.
+        """
+        if candidates is None:
+            return None
+        if not (detector and self.weight > 0 and self.appearance_cues and len(candidates)):
+            return assign(predicted, candidates, self.gate)
+        rows, cols = contested_pairs(predicted, candidates, self.gate)
+        if not rows.size:
+            return assign(predicted, candidates, self.gate)
+        states = np.zeros((rows.size, STATE_DIM))
+        states[:, CX] = candidates[cols, 0] + candidates[cols, 2] / 2.0
+        states[:, CY] = candidates[cols, 1] + candidates[cols, 3] / 2.0
+        likeness = np.zeros((len(predicted), len(candidates)))
+        likeness[rows, cols] = np.clip(template_similarity(self.appearance_cues, obs, states, rows), 0.0, 1.0)
+        return assign(predicted, candidates, self.gate, likeness, self.weight)

@@ -19,9 +19,10 @@ then reads the outcome:
   anywhere in the image (``anywhere``) or only in the border zone (SPEC B.4 as printed).
   On the first frame every free candidate is born at once (``first_frame``).
 
-Taking back a lost id by appearance needs the cues' templates, which the
-:class:`~belief_tracking.tracks.TrackManager` holds; :class:`Lifecycle` only keeps
-the counters and the chains.
+Each track's counters live in its record (:class:`~belief_tracking.store.Life`, in
+:class:`~belief_tracking.store.Track`); :class:`Lifecycle` updates them and keeps only the
+chains, which belong to no track yet.  Taking back a lost id by appearance is the
+:class:`~belief_tracking.tracks.TrackManager`'s.
 """
 
 from __future__ import annotations
@@ -30,9 +31,12 @@ from typing import NamedTuple
 
 import numpy as np
 
+from collections.abc import Sequence
+
 from .association import UNASSIGNED
 from .boxes import box_centres, intersections, iou
 from .initiation import COVERED_FRACTION, InitiationConfig, foreground_fraction
+from .store import Life
 
 __all__ = ["Lifecycle", "FrameOutcome", "DUPLICATE_INSIDE"]
 
@@ -48,9 +52,10 @@ class FrameOutcome(NamedTuple):
     births : ndarray, shape (k, 4)
         Boxes of the chains that are born.
     lost : list of int
-        Ids of the tracks that are lost this frame (no longer output; remembered).
+        The tracks that are lost this frame (no longer output; remembered), as positions in
+        the ``lives`` given to :meth:`Lifecycle.update`.
     ended : list of int
-        Ids of the tracks that end this frame (left the image, or duplicates).
+        The tracks that end this frame (left the image, or duplicates), likewise.
     """
 
     births: np.ndarray
@@ -72,14 +77,18 @@ class Lifecycle:
     A candidate seen on three consecutive frames is born; the track then misses its
     candidate and is lost after ``lost_frames`` frames:
 
-    >>> life = Lifecycle(InitiationConfig(appear_frames=3, lost_frames=2, first_frame=False), (100, 100))
+    >>> lifecycle = Lifecycle(InitiationConfig(appear_frames=3, lost_frames=2, first_frame=False), (100, 100))
     >>> none = np.zeros(0, np.intp)
     >>> for x in (40, 41, 42):
-    ...     outcome = life.update([], np.zeros((0, 4)), none, np.array([[x, 30, 10, 20, 0.9]]))
+    ...     outcome = lifecycle.update([], np.zeros((0, 4)), none, np.array([[x, 30, 10, 20, 0.9]]))
     >>> outcome.births.tolist()
     [[42.0, 30.0, 10.0, 20.0]]
-    >>> [life.update([1], np.array([[43.0, 30, 10, 20]]), np.array([-1]), np.zeros((0, 5))).lost for _ in range(2)]
-    [[], [1]]
+    >>> life = Life()
+    >>> box = np.array([[43.0, 30, 10, 20]])
+    >>> [lifecycle.update([life], box, np.array([-1]), np.zeros((0, 5))).lost for _ in range(2)]
+    [[], [0]]
+    >>> life
+    Life(age=2, hits=0, unsupported=2, leaving=0, twins=0)
     """
 
     def __init__(self, config: InitiationConfig, image_shape: tuple[int, int]) -> None:
@@ -88,18 +97,11 @@ class Lifecycle:
         self._frames = 0
         self._chains = np.zeros((0, 4))
         self._chain_lengths = np.zeros(0, dtype=np.intp)
-        self._unsupported: dict[int, int] = {}
-        self._leaving: dict[int, int] = {}
-        self._twins: dict[int, int] = {}
 
     @property
     def chains(self) -> list[tuple[tuple[float, ...], int]]:
         """The chains after the last frame: ``(last box, frames seen)``."""
         return [(tuple(float(v) for v in box), int(n)) for box, n in zip(self._chains, self._chain_lengths)]
-
-    def unsupported(self, track_id: int) -> int:
-        """Consecutive frames that track ``track_id`` has gone without support."""
-        return self._unsupported.get(track_id, 0)
 
     def in_border_zone(self, boxes: np.ndarray) -> np.ndarray:
         """Whether any pixel of each box ``(x, y, w, h)`` lies within ``border`` px of an image edge."""
@@ -109,15 +111,16 @@ class Lifecycle:
         return ((boxes[:, 0] < b) | (boxes[:, 1] < b)
                 | (boxes[:, 0] + boxes[:, 2] > width - b) | (boxes[:, 1] + boxes[:, 3] > height - b))
 
-    def update(self, ids: list[int], boxes: np.ndarray, assigned: np.ndarray, candidates: np.ndarray,
+    def update(self, lives: Sequence[Life], boxes: np.ndarray, assigned: np.ndarray, candidates: np.ndarray,
                foreground: np.ndarray | None = None, births_allowed: bool = True,
                likeness: np.ndarray | None = None) -> FrameOutcome:
         """Read one frame.
 
         Parameters
         ----------
-        ids : list of int
-            The live tracks, in increasing age (an older track comes first).
+        lives : sequence of Life
+            The counters of the live tracks, in increasing age (an older track comes
+            first); those of the tracks that go on are updated in place.
         boxes : ndarray, shape (τ, 4)
             Their boxes in this frame.
         assigned : ndarray of int, shape (τ,)
@@ -155,12 +158,12 @@ class Lifecycle:
             supported |= own & (foreground_fraction(foreground, boxes) >= config.exit_foreground)
         if likeness is not None and config.appearance_support is not None and len(boxes):
             supported |= own & (np.asarray(likeness) >= config.appearance_support)
-        lost, ended = self._track_counters(ids, boxes, supported)
+        lost, ended = self._count(lives, boxes, supported, took)
 
         taken = np.zeros(len(candidates), dtype=bool)
         taken[assigned[took]] = True
-        gone = set(lost) | set(ended)
-        live = np.array([track_id not in gone for track_id in ids], dtype=bool)
+        live = np.ones(len(lives), dtype=bool)
+        live[lost + ended] = False
         free = ~taken & ~self._covered(candidates, boxes[live])
         if not births_allowed:
             self._chains = np.zeros((0, 4))
@@ -175,35 +178,42 @@ class Lifecycle:
         return FrameOutcome(births, lost, ended)
 
     # -- steps ----------------------------------------------------------------------------------
-    def _track_counters(self, ids: list[int], boxes: np.ndarray, supported: np.ndarray) -> tuple[list[int], list[int]]:
+    def _count(self, lives: Sequence[Life], boxes: np.ndarray, supported: np.ndarray,
+               took: np.ndarray) -> tuple[list[int], list[int]]:
+        """Update the counters of the tracks that go on; the positions of those lost and of those ended."""
         config = self.config
         height, width = self.image_shape
         b = config.border
         centres = box_centres(boxes) if len(boxes) else np.zeros((0, 2))
         at_border = (centres[:, 0] < b) | (centres[:, 0] >= width - b) | (centres[:, 1] < b) \
             | (centres[:, 1] >= height - b)
-        overlaps = iou(boxes, boxes) if len(ids) else np.zeros((0, 0))
-        # A box mostly inside an older track's box follows the same person as much as one
-        # that overlaps it by IoU: a fragment (legs, a head) of someone already followed.
-        inside = intersections(boxes, boxes) / np.maximum(boxes[:, 2] * boxes[:, 3], 1e-12)[:, None] \
-            if len(ids) else np.zeros((0, 0))
-        twin = (overlaps >= config.duplicate_iou) | (inside >= DUPLICATE_INSIDE)
-        duplicate = np.array([twin[k, :k].any() for k in range(len(ids))], dtype=bool)
-        unsupported, leaving, twins = {}, {}, {}
+        duplicate = self._duplicates(boxes)
         lost, ended = [], []
-        for k, track_id in enumerate(ids):
-            missed = 0 if supported[k] else self._unsupported.get(track_id, 0) + 1
-            out = self._leaving.get(track_id, 0) + 1 if at_border[k] and not supported[k] else 0
-            twin = self._twins.get(track_id, 0) + 1 if duplicate[k] else 0
+        for k, life in enumerate(lives):
+            missed = 0 if supported[k] else life.unsupported + 1
+            out = life.leaving + 1 if at_border[k] and not supported[k] else 0
+            twin = life.twins + 1 if duplicate[k] else 0
             if out >= config.exit_frames or (config.duplicate_frames is not None
                                              and twin >= config.duplicate_frames):
-                ended.append(track_id)
+                ended.append(k)
             elif config.lost_frames is not None and missed >= config.lost_frames:
-                lost.append(track_id)
+                lost.append(k)
             else:
-                unsupported[track_id], leaving[track_id], twins[track_id] = missed, out, twin
-        self._unsupported, self._leaving, self._twins = unsupported, leaving, twins
+                life.unsupported, life.leaving, life.twins = missed, out, twin
+                life.age += 1
+                life.hits += int(took[k])
         return lost, ended
+
+    def _duplicates(self, boxes: np.ndarray) -> np.ndarray:
+        """Whether each box follows the same person as an older track's box, shape (τ,)."""
+        if not len(boxes):
+            return np.zeros(0, dtype=bool)
+        overlaps = iou(boxes, boxes)
+        # A box mostly inside an older track's box follows the same person as much as one
+        # that overlaps it by IoU: a fragment (legs, a head) of someone already followed.
+        inside = intersections(boxes, boxes) / np.maximum(boxes[:, 2] * boxes[:, 3], 1e-12)[:, None]
+        twin = (overlaps >= self.config.duplicate_iou) | (inside >= DUPLICATE_INSIDE)
+        return np.array([twin[k, :k].any() for k in range(len(boxes))], dtype=bool)
 
     @staticmethod
     def _covered_by(boxes: np.ndarray, took: np.ndarray) -> np.ndarray:
