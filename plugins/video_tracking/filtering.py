@@ -38,7 +38,7 @@ class Prediction:
 
     Examples
     --------
-    >>> prediction = Prediction(MotionConfig(sigma_pos=0.0, sigma_vel=0.0, sigma_scale=0.0), (50, 80))
+    >>> prediction = Prediction(MotionConfig(sigma_pos=0.0, sigma_vel=0.0), (50, 80))
     >>> track = Track.born(1, (10, 10, 4, 8), np.array([[12.0, 14.0, 1.0, 0.5, 0.2]]), {})
     >>> prediction([track], None, np.random.default_rng(0))[0].states.tolist()
     [[13.0, 14.5, 1.0, 0.5, 0.0]]
@@ -135,9 +135,10 @@ class ParticleCount:
     >>> from belief_tracking.fusion import FusionConfig
     >>> count = ParticleCount(10, "mass", BeliefWeighting(FusionConfig(masses="normalised")))
     >>> scores = (np.log([[0.6, 0.3, 0.1]] * 2), np.log([[0.2, 0.7, 0.1]] * 2))
-    >>> count.kappa(Evidence(scores, np.array([0, 1]), np.zeros((2, 2)))).round(4).tolist()
-    [0.1485, 0.2739]
-    >>> count(Evidence(scores, np.array([0, 1]), np.zeros((2, 2))))
+    >>> evidence = Evidence(scores, np.array([0, 1]), np.zeros((2, 2)))
+    >>> count.kappa(evidence).round(4).tolist()                  # m(θ1 ∩ θ2) + m(∅), the same for both
+    [0.3036, 0.3036]
+    >>> count(evidence)                                          # 5 + ⌈5 · 0.3036⌉
     [7, 7]
     """
 
@@ -165,7 +166,7 @@ def resample(tracks: Sequence[Track], weighted: Sequence[ParticleSet], rng: np.r
     """W-S5: every track's weighted set resampled (to ``counts`` particles with the adaptive number).
 
     >>> track = Track.born(1, (0, 0, 2, 2), np.zeros((2, 5)), {})
-    >>> weighted = [ParticleSet(np.array([[0.0, 0, 0, 0, 0], [4.0, 0, 0, 0, 0]]), np.log([0.0, 1.0]))]
+    >>> weighted = [ParticleSet(np.array([[0.0, 0, 0, 0, 0], [4.0, 0, 0, 0, 0]]), np.array([-np.inf, 0.0]))]
     >>> resample([track], weighted, np.random.default_rng(0), "systematic", 1.0, [3])
     >>> track.particles.states[:, 0].tolist()
     [4.0, 4.0, 4.0]

@@ -83,12 +83,11 @@ class Lifecycle:
     ...     outcome = lifecycle.update([], np.zeros((0, 4)), none, np.array([[x, 30, 10, 20, 0.9]]))
     >>> outcome.births.tolist()
     [[42.0, 30.0, 10.0, 20.0]]
-    >>> life = Life()
-    >>> box = np.array([[43.0, 30, 10, 20]])
-    >>> [lifecycle.update([life], box, np.array([-1]), np.zeros((0, 5))).lost for _ in range(2)]
-    [[], [0]]
-    >>> life
-    Life(age=2, hits=0, unsupported=2, leaving=0, twins=0)
+    >>> life, box = Life(), np.array([[43.0, 30, 10, 20]])
+    >>> lifecycle.update([life], box, np.array([-1]), np.zeros((0, 5))).lost, life
+    ([], Life(age=1, hits=0, unsupported=1, leaving=0, twins=0))
+    >>> lifecycle.update([life], box, np.array([-1]), np.zeros((0, 5))).lost      # the track at position 0
+    [0]
     """
 
     def __init__(self, config: InitiationConfig, image_shape: tuple[int, int]) -> None:

@@ -16,7 +16,7 @@ import pytest
 
 import belief_tracking
 
-MODULES = sorted(f"belief_tracking.{info.name}" for info in pkgutil.iter_modules(belief_tracking.__path__))
+MODULES = sorted(info.name for info in pkgutil.walk_packages(belief_tracking.__path__, "belief_tracking."))
 
 
 def test_the_plugin_has_its_modules():

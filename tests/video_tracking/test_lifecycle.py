@@ -17,6 +17,7 @@ from belief_tracking.cues import DetectionConfig, DetectionCue, Observation
 from belief_tracking.errors import TrackingError
 from belief_tracking.initiation import InitiationConfig
 from belief_tracking.lifecycle import Lifecycle
+from belief_tracking.store import Life
 from belief_tracking.tracker import Tracker
 
 NONE = np.zeros(0, dtype=np.intp)
@@ -149,7 +150,7 @@ def test_the_tracker_weighs_each_detection_by_how_much_it_looks_like_each_track(
     # Two people side by side, red and blue, whose boxes overlap both detections: the
     # likeness the tracker hands to the assignment is high for each person's own detection
     # and low for the other's, whatever their order.
-    import belief_tracking.tracker as tracker_module
+    import belief_tracking.association as association_module
 
     image = np.full((100, 120, 3), 128, np.uint8)
     image[20:50, 20:30] = (0, 0, 255)
@@ -161,7 +162,7 @@ def test_the_tracker_weighs_each_detection_by_how_much_it_looks_like_each_track(
         seen.append((None if likeness is None else np.array(likeness), appearance_weight))
         return assign(tracks, candidates, min_iou, likeness, appearance_weight)
 
-    monkeypatch.setattr(tracker_module, "assign", spy)
+    monkeypatch.setattr(association_module, "assign", spy)
 
     def tracker(**initiation):
         config = TrackerConfig(particles=20, cues=("colour", "location"),
@@ -232,7 +233,7 @@ def test_a_chain_of_candidates_is_born_after_appear_frames_anywhere_in_the_image
 def test_every_free_candidate_of_the_first_frame_is_born_at_once_and_covered_ones_never():
     life = lifecycle(first_frame=True)
     candidates = np.array([[10.0, 10, 10, 20, 1], [100, 40, 10, 20, 1], [102, 42, 8, 16, 1]])
-    outcome = life.update([7], np.array([[100.0, 40, 10, 20]]), np.array([1]), candidates)
+    outcome = life.update([Life()], np.array([[100.0, 40, 10, 20]]), np.array([1]), candidates)
     # The second is the track's own; the third lies inside the track's box.
     assert outcome.births.tolist() == [[10.0, 10.0, 10.0, 20.0]]
 
@@ -240,13 +241,18 @@ def test_every_free_candidate_of_the_first_frame_is_born_at_once_and_covered_one
 def test_an_unsupported_track_is_lost_after_lost_frames_and_a_track_at_the_border_ends():
     life = lifecycle(lost_frames=3, exit_frames=2, appearance_support=None)
     inside, border = np.array([[100.0, 40, 10, 20]]), np.array([[195.0, 40, 10, 20]])
-    assert [life.update([1], inside, np.array([-1]), np.zeros((0, 5))).lost for _ in range(3)] == [[], [], [1]]
-    assert [life.update([2], border, np.array([-1]), np.zeros((0, 5))).ended for _ in range(2)] == [[], [2]]
+    hidden, leaving = Life(), Life()
+    assert [life.update([hidden], inside, np.array([-1]), np.zeros((0, 5))).lost for _ in range(3)] == [[], [], [0]]
+    assert hidden.unsupported == 2 and hidden.age == 2              # not counted on in the frame it is lost
+    assert [life.update([leaving], border, np.array([-1]), np.zeros((0, 5))).ended for _ in range(2)] == [[], [0]]
+    assert leaving.leaving == 1
     # A candidate every other frame keeps a track alive.
     life = lifecycle(lost_frames=2, appearance_support=None)
-    outcomes = [life.update([3], inside, np.array([k % 2 - 1]), np.array([[100.0, 40, 10, 20, 1]]))
+    kept = Life()
+    outcomes = [life.update([kept], inside, np.array([k % 2 - 1]), np.array([[100.0, 40, 10, 20, 1]]))
                 for k in range(8)]
     assert not any(o.lost for o in outcomes)
+    assert (kept.age, kept.hits, kept.unsupported) == (8, 4, 0)
 
 
 def test_foreground_supports_a_track_only_where_no_other_track_took_a_candidate():
@@ -254,20 +260,24 @@ def test_foreground_supports_a_track_only_where_no_other_track_took_a_candidate(
     mask[40:60, 100:110] = True
     life = lifecycle(lost_frames=2, appearance_support=None)
     followed = np.array([[100.0, 40, 10, 20], [101, 41, 8, 18], [100, 40, 10, 20]])
-    lost = [life.update([1, 2], followed[:2], np.array([0, -1]), np.array([[100.0, 40, 10, 20, 1]]),
+    pair = [Life(), Life()]
+    lost = [life.update(pair, followed[:2], np.array([0, -1]), np.array([[100.0, 40, 10, 20, 1]]),
                         foreground=mask).lost for _ in range(2)]
-    assert lost == [[], [2]]                   # track 2 sits on the person track 1 follows
+    assert lost == [[], [1]]                   # the second track sits on the person the first follows
     alone = lifecycle(lost_frames=2, appearance_support=None)
-    assert [alone.update([5], followed[2:], np.array([-1]), np.zeros((0, 5)), foreground=mask).lost
+    single = [Life()]
+    assert [alone.update(single, followed[2:], np.array([-1]), np.zeros((0, 5)), foreground=mask).lost
             for _ in range(3)] == [[], [], []]
 
 
 def test_a_track_mostly_inside_an_older_one_ends_as_its_duplicate():
     life = lifecycle(duplicate_frames=3, appearance_support=None)
     pair = np.array([[100.0, 40, 20, 40], [104, 50, 10, 20]])                  # IoU 0.25, all inside
-    ended = [life.update([1, 2], pair, np.array([0, 1]), np.array([[100.0, 40, 20, 40, 1], [104, 50, 10, 20, 1]]))
+    lives = [Life(), Life()]
+    ended = [life.update(lives, pair, np.array([0, 1]), np.array([[100.0, 40, 20, 40, 1], [104, 50, 10, 20, 1]]))
              .ended for _ in range(3)]
-    assert ended == [[], [], [2]]
+    assert ended == [[], [], [1]]                                              # the younger one
+    assert lives[1].twins == 2 and lives[0].twins == 0
 
 
 def test_no_chain_grows_while_births_are_not_allowed():
@@ -324,7 +334,7 @@ def test_a_person_lost_behind_a_wall_takes_back_their_id_when_they_come_out(rend
     gt, visible = scene.ground_truth, scene.visibility
     ids_on_walker, lost_ever = [], set()
     for result in tracker.track(scene.frames):
-        lost_ever |= set(tracker.tracks.lost)
+        lost_ever |= set(tracker.store.lost)
         row = (gt[:, 0] == result.frame) & (gt[:, 1] == 1) & (visible == 1)
         if not row.any() or not result.estimates:
             continue

@@ -102,7 +102,7 @@ def test_births_and_deaths_follow_the_ground_truth():
     tracker = Tracker(TrackerConfig(particles=10, cues=("location", "colour")), plan, np.random.default_rng(0))
     ids = [[e.id for e in tracker.step(t, image).estimates] for t in range(1, 6)]
     assert ids == [[7], [7, 9], [7, 9], [9], []]
-    assert tracker.cues[1].n_targets == 0
+    assert len(tracker.store) == 0 and not tracker.store.lost
 
 
 def test_newborn_output_is_its_box():

@@ -96,7 +96,7 @@ def test_an_occluded_target_keeps_its_template(fusion, update, rendered_scene):
     before = {}
 
     def watch(tracker, frame):
-        before[frame] = [cue.templates.copy() for cue in tracker.cues if hasattr(cue, "templates")]
+        before[frame] = [{name: t.copy() for name, t in track.templates.items()} for track in tracker.store]
 
     tracker, per_frame = run_scene(scene, config, plan=init_from_gt(scene.ground_truth), watch=watch)
     flags = {key: row["occluded"] for key, row in diagnostics_by_frame(per_frame).items()}
@@ -107,7 +107,8 @@ def test_an_occluded_target_keeps_its_template(fusion, update, rendered_scene):
     for frame in range(2, len(scene)):
         after = before[frame + 1]
         for j, target_id in enumerate((1, 2)):
-            same = all(np.array_equal(b[j], a[j]) for b, a in zip(before[frame], after))
+            same = before[frame][j].keys() == after[j].keys() == {"colour"} \
+                and all(np.array_equal(before[frame][j][name], after[j][name]) for name in after[j])
             if flags[(frame, target_id)] == 1.0:
                 assert same, (frame, target_id)
             else:
@@ -122,8 +123,9 @@ def test_fixed_templates_by_default_for_the_belief_rules(rendered_scene):
     assert TrackerConfig(fusion="adaptive", template_update=False).updates_templates     # C's method includes it
     tracker, _ = run_scene(scenes.Scene(scene.config, scene.frames[:6], scene.ground_truth, scene.visibility),
                            config, plan=init_from_gt(scene.ground_truth[scene.ground_truth[:, 0] <= 6]))
-    colour = tracker.cues[0]
-    assert np.array_equal(colour.templates, colour.initial_templates)
+    assert len(tracker.store) == 2
+    for track in tracker.store:
+        assert np.array_equal(track.templates["colour"], track.initial_templates["colour"])
 
 
 # -- adaptive particle count ----------------------------------------------------------------------
@@ -182,8 +184,8 @@ def test_only_the_active_strategy_runs_by_default(fusion, columns, monkeypatch, 
     monkeypatch.setattr(weighting.BeliefWeighting, "fuse",
                         lambda self, evidence, real=weighting.BeliefWeighting.fuse: calls.append("belief")
                         or real(self, evidence))
-    monkeypatch.setattr(adaptive, "feature_spreads",
-                        lambda *a, real=adaptive.feature_spreads, **k: calls.append("spreads") or real(*a, **k))
+    monkeypatch.setattr(adaptive, "_spreads",
+                        lambda *a, real=adaptive._spreads, **k: calls.append("spreads") or real(*a, **k))
     scene = rendered_scene(scenes.crossing(0))
     short = scenes.Scene(scene.config, scene.frames[:4], scene.ground_truth, scene.visibility)
     config = TrackerConfig(particles=20, cues=("colour", "location"), fusion=fusion)

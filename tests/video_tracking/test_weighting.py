@@ -92,12 +92,14 @@ def test_predicted_reference_centres_the_location_cue_ahead_of_a_moving_target()
     tracker = Tracker(config, init_from_boxes([(40, 30, 10, 20)]), np.random.default_rng(0))
     tracker.step(1, image)
     tracker.targets[0].estimate[2:4] = (4.0, -2.0)
-    assert np.allclose(tracker._location_centres(), [[49.0, 38.0]])
+    assert np.allclose(tracker._observation(tracker.observe(2, image, None, []), tracker.targets).centres,
+                       [[49.0, 38.0]])
     literal = Tracker(TrackerConfig(particles=5, cues=("location",), location=LocationConfig(literal=True)),
                       init_from_boxes([(40, 30, 10, 20)]), np.random.default_rng(0))
     literal.step(1, image)
     literal.targets[0].estimate[2:4] = (4.0, -2.0)
-    assert np.allclose(literal._location_centres(), [[45.0, 40.0]])       # W (22): the previous estimate
+    assert np.allclose(literal._observation(literal.observe(2, image, None, []), literal.targets).centres,
+                       [[45.0, 40.0]])                                     # W (22): the previous estimate
 
 
 def test_perspective_fit_recovers_a_ground_plane_and_refuses_what_is_not_one():
