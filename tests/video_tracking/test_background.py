@@ -143,6 +143,55 @@ def test_protect_must_be_a_bool_mask_of_the_frame_shape():
         model.apply(frame, protect=np.zeros((30, 20), bool))
 
 
+def test_a_shadow_is_background_only_when_shadows_are_detected():
+    rng = np.random.default_rng(10)
+    scene = textured(rng)
+    shadow = square_mask(scene.shape, 20, 20, 20)
+    fractions = {}
+    for detect in (True, False):
+        model = BackgroundModel(BackgroundConfig(detect_shadows=detect, downscale=1))
+        model.warm_up(noisy(scene, rng) for _ in range(30))
+        frame = noisy(scene, rng)
+        frame[shadow] = (frame[shadow] * 0.7).astype(np.uint8)   # darker, same chromaticity
+        fractions[detect] = model.apply(frame)[shadow].mean()
+    assert fractions[True] < 0.05 and fractions[False] > 0.95
+
+
+def test_grey_frames_are_modelled_as_well_as_colour_ones():
+    rng = np.random.default_rng(11)
+    scene = textured(rng)[:, :, 0]
+    model = BackgroundModel(FULL)
+    assert model.warm_up(noisy(scene, rng) for _ in range(10)) == 10
+    frame = noisy(scene, rng)
+    frame[10:25, 30:45] = 250
+    mask = model.apply(frame)
+    assert mask.shape == scene.shape and mask[10:25, 30:45].all()
+    assert mask[square_mask(scene.shape, 30, 10, 15) == 0].mean() < 0.01
+
+
+def test_the_model_counts_its_frames_and_the_foreground_of_its_last_mask():
+    rng = np.random.default_rng(12)
+    scene = textured(rng)
+    model = BackgroundModel(FULL)
+    assert model.warm_up([]) == 0 and model.frames_seen == 0
+    assert model.warm_up(noisy(scene, rng) for _ in range(6)) == 6 and model.frames_seen == 6
+    frame = noisy(scene, rng)
+    frame[0:30, 0:40] = GREEN                                    # a quarter of the 60 x 80 frame
+    mask = model.apply(frame)
+    assert model.frames_seen == 7
+    assert model.foreground_fraction == mask.mean() and 0.24 < model.foreground_fraction < 0.27
+    assert repr(model).endswith("frames_seen=7)")
+
+
+def test_without_gain_compensation_the_gain_stays_one():
+    rng = np.random.default_rng(13)
+    scene = textured(rng)
+    model = BackgroundModel(BackgroundConfig(compensate_gain=False, downscale=1))
+    model.warm_up(noisy(scene, rng) for _ in range(10))
+    model.apply(noisy(scene, rng, gain=1.2))
+    assert model.gain == 1.0
+
+
 # -- light -----------------------------------------------------------------------------------------
 def gain_ramp(model: BackgroundModel, scene, rng, gains):
     fractions, flags = [], []

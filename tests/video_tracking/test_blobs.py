@@ -52,6 +52,15 @@ def test_people_side_by_side_are_split(count):
     assert len(found) == count and matched(found, truth)
 
 
+def test_split_width_says_how_many_people_wide_a_blob_must_be_to_be_split():
+    mask = empty()
+    mask[140:200, 100:136] = True                            # 36 px wide where a person is 24: 1.5 people
+    assert person_boxes(mask, SIZE, min_area_pixels=MIN_AREA).tolist() == [[100.0, 140.0, 36.0, 60.0]]
+    # At split_width 1.4 (33.6 px) it is split into round(36 / 24) = 2 halves at the even cut, 18 px.
+    assert person_boxes(mask, SIZE, min_area_pixels=MIN_AREA, split_width=1.4).tolist() == [
+        [100.0, 140.0, 18.0, 60.0], [118.0, 140.0, 18.0, 60.0]]
+
+
 def test_a_person_a_little_wider_than_expected_is_not_split():
     mask = empty()
     truth = person(mask, 150, 200, scale=1.3)

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from belief_tracking import detections as detections_module
 from belief_tracking import outputs
 from belief_tracking.config import TrackerConfig
-from belief_tracking.detections import Detections, check_detections, read_detections, write_detections
+from belief_tracking.detections import Detections, check_detections, check_rows, read_detections, write_detections
 from belief_tracking.errors import DetectionFileError, TrackFileError, TrackingError
 from belief_tracking.initiation import read_init_boxes
 from belief_tracking.runner import run
@@ -23,6 +23,47 @@ def test_docstring_examples():
     for module in (detections_module, outputs):
         result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
         assert result.attempted > 0 and result.failed == 0, module.__name__
+
+
+# -- the container ------------------------------------------------------------------------------------
+def test_detections_keep_the_frames_with_boxes_in_order_and_count_every_box():
+    rows = [[1.0, 2.0, 3.0, 4.0, 0.5], [5.0, 6.0, 7.0, 8.0, 1.0]]
+    dets = Detections({9: rows[:1], 2: rows, 5: []}, source="mine")
+    assert dets.frames == (2, 9) and len(dets) == 3           # frame 5 has no box: not a frame of the detections
+    assert dets.at(2).tolist() == rows and dets.at(9).tolist() == rows[:1]
+    assert dets.at(5).shape == (0, 5) and dets.at(np.int64(2)).tolist() == rows
+    assert repr(dets) == "Detections(3 boxes over 2 frames from 'mine')"
+    assert len(Detections()) == 0 and Detections().frames == ()
+
+
+def test_the_detections_of_a_frame_refuse_writes():
+    dets = Detections({1: [[1.0, 2.0, 3.0, 4.0, 0.5]]})
+    with pytest.raises(ValueError, match="read-only"):
+        dets.at(1)[0, 0] = 5.0
+    assert dets.at(1)[0, 0] == 1.0 and not dets.at(7).flags.writeable
+
+
+@pytest.mark.xfail(strict=True, reason="Detections keeps a view of a float64 (n, 5) array it is given: "
+                                       "the caller can still change the detections through it")
+def test_detections_do_not_change_with_the_array_they_were_made_from():
+    given_rows = np.array([[1.0, 2.0, 3.0, 4.0, 0.5]])
+    dets = Detections({1: given_rows})
+    given_rows[0, 0] = 99.0
+    assert dets.at(1)[0, 0] == 1.0
+
+
+def test_rows_on_the_edges_of_the_ranges_are_accepted():
+    # Negative corners (a box reaching past the top-left corner), the scores 0 and 1, tiny sizes.
+    rows = [[-5.0, -5.0, 1e-3, 1e-3, 0.0], [0.0, 0.0, 10.0, 10.0, 1.0]]
+    assert check_rows(rows, "frame 1").tolist() == rows
+    assert check_rows(np.zeros((0, 5)), "frame 1").shape == (0, 5)
+
+
+def test_detections_that_reach_into_the_video_fit_it():
+    # The last frame of the video, and boxes that share only a sliver with the 64 x 48 image.
+    dets = Detections({4: [[-9.5, 0.0, 10.0, 10.0, 0.9], [63.5, 47.5, 10.0, 10.0, 0.9]]}, source="mine")
+    assert check_detections(dets, frame_count=4, image_size=(64, 48)) is None
+    assert check_detections(Detections(), frame_count=1, image_size=(1, 1)) is None
 
 
 # -- reading ------------------------------------------------------------------------------------------

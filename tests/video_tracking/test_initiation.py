@@ -6,11 +6,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from belief_tracking.errors import TrackingError
+from belief_tracking.errors import InitError, TrackingError
 from belief_tracking.initiation import (
     InitiationConfig,
+    InitPlan,
+    TargetInit,
     foreground_blobs,
     foreground_fraction,
+    init_from_boxes,
+    init_from_gt,
+    read_init_boxes,
 )
 
 H, W = 60, 80  # the small image of most tests: 4800 pixels, so the default min area is 9.6 px
@@ -26,6 +31,100 @@ def mask_with(*boxes) -> np.ndarray:
     for x, y, w, h in boxes:
         mask[max(y, 0):max(y + h, 0), max(x, 0):max(x + w, 0)] = True
     return mask
+
+
+# -- init plans ----------------------------------------------------------------------------------------
+
+def target(id, first, last=None, box=(0, 0, 2, 2)):
+    return TargetInit(id, first, last, box)
+
+
+def test_a_plan_orders_its_targets_by_birth_then_id_and_lists_each_frame_s_births():
+    plan = InitPlan((target(9, 3), target(4, 1, 5), target(2, 3, 3), target(7, 1)), source="mine")
+    assert [(t.id, t.first_frame) for t in plan.targets] == [(4, 1), (7, 1), (2, 3), (9, 3)]
+    assert [t.id for t in plan.births(1)] == [4, 7]
+    assert [t.id for t in plan.births(3)] == [2, 9]
+    assert plan.births(2) == [] and plan.births(99) == []
+    plan.births(1).clear()                                   # a copy: the plan keeps its births
+    assert len(plan.births(1)) == 2
+
+
+def test_a_target_s_fields_are_made_plain_ints_and_floats():
+    born = TargetInit(np.int64(3), np.int32(2), 2, [np.float32(1.5), 2, 3, 4])
+    assert born == TargetInit(3, 2, 2, (1.5, 2.0, 3.0, 4.0))
+    assert type(born.id) is int and type(born.first_frame) is int and all(type(v) is float for v in born.box)
+
+
+@pytest.mark.parametrize("targets, peak", [
+    ([target(1, 1, 3), target(2, 2), target(3, 4, 5)], (2, 2)),           # the docstring's plan
+    ([target(1, 1, 1), target(2, 2), target(3, 2), target(4, 3)], (3, 3)),  # 1 leaves as 2 and 3 come
+    ([target(1, 1, 2), target(2, 3, 4), target(3, 5)], (1, 1)),            # one at a time: never two
+    ([target(1, 4), target(2, 4, 4), target(3, 5)], (2, 4)),               # 2 ends after frame 4, 3 comes at 5
+])
+def test_the_peak_is_the_most_targets_alive_at_once_and_when_that_first_happens(targets, peak):
+    # A target is alive from its first frame to its last, both included.
+    assert InitPlan(tuple(targets)).peak() == peak
+
+
+def test_a_birth_box_must_share_some_area_with_the_image():
+    def plan(x, y, w=10.0, h=10.0):
+        return InitPlan((TargetInit(1, 1, None, (x, y, w, h)),), source="plan")
+
+    for inside in [(0, 0), (-9.5, -9.5), (319.5, 239.5), (-5, 100)]:
+        plan(*inside).check_image(320, 240)                  # reaches into the image: accepted
+    for outside in [(320, 0), (0, 240), (-10, 0), (0, -10)]:
+        with pytest.raises(InitError, match="lies outside the 320x240 image"):
+            plan(*outside).check_image(320, 240)
+
+
+def test_the_ground_truth_gives_each_id_its_first_box_0_based_and_its_last_frame():
+    rows = np.array([
+        [3, 5, 13, 21, 10, 20, 1],
+        [1, 5, 11, 21, 10, 20, 0],      # id 5's first box, though on the second row; the flag is not used
+        [2, 5, 12, 21, 10, 20, 1],
+        [6, 8, 101, 51, 20, 40, 1],
+        [2, 8, 100.5, 50, 20, 40, 1],   # id 8: frames 2 and 6, absent in between
+    ], dtype=float)
+    plan = init_from_gt(rows)
+    assert [(t.id, t.first_frame, t.last_frame, t.box) for t in plan.targets] == [
+        (5, 1, 3, (10.0, 20.0, 10.0, 20.0)), (8, 2, 6, (99.5, 49.0, 20.0, 40.0))]
+    assert plan.source == "ground truth" and init_from_gt(rows, source="gt.txt").source == "gt.txt"
+
+
+def test_the_ground_truth_may_come_from_a_file(tmp_path):
+    path = tmp_path / "gt.txt"
+    path.write_text("2,4,31,41,8,16,1,-1,-1,-1\n1,3,1,1,5,5,1,-1,-1,-1\n3,4,32,41,8,16,1,-1,-1,-1\n")
+    plan = init_from_gt(path)
+    assert [(t.id, t.first_frame, t.last_frame, t.box) for t in plan.targets] == [
+        (3, 1, 1, (0.0, 0.0, 5.0, 5.0)), (4, 2, 3, (30.0, 40.0, 8.0, 16.0))]
+    assert plan.source == str(path)
+
+
+def test_an_init_file_gives_targets_born_at_frame_one_and_never_removed(tmp_path):
+    path = tmp_path / "boxes.csv"
+    # A byte-order mark, a header, a comment, a blank line and blanks around the fields.
+    path.write_text("\ufeffID, X, Y, W, H\n# the two people at the door\n\n 7 , 11, 21.5 ,8,16\n2,1,1,4.5,9\n",
+                    encoding="utf-8")
+    plan = read_init_boxes(path)
+    assert plan.targets == (TargetInit(2, 1, None, (0.0, 0.0, 4.5, 9.0)), TargetInit(7, 1, None, (10.0, 20.5, 8.0, 16.0)))
+    assert plan.source == str(path)
+
+
+def test_a_header_after_the_first_box_is_no_header(tmp_path):
+    path = tmp_path / "boxes.csv"
+    path.write_text("1,11,21,8,16\nid,x,y,w,h\n")
+    with pytest.raises(InitError, match="line 2: a field is not a number"):
+        read_init_boxes(path)
+
+
+def test_boxes_in_code_are_numbered_from_one_unless_ids_are_given():
+    plan = init_from_boxes([(10, 20, 8, 16), (0, 0, 4, 4)])
+    assert [(t.id, t.first_frame, t.last_frame, t.box) for t in plan.targets] == [
+        (1, 1, None, (10.0, 20.0, 8.0, 16.0)), (2, 1, None, (0.0, 0.0, 4.0, 4.0))]
+    assert [t.id for t in init_from_boxes([(0, 0, 1, 1), (5, 5, 1, 1)], ids=[9, 3]).targets] == [3, 9]
+    assert plan.source == "boxes"
+    with pytest.raises(InitError, match="1 ids for 2 boxes"):
+        init_from_boxes([(0, 0, 1, 1), (5, 5, 1, 1)], ids=[9])
 
 
 # -- blobs ---------------------------------------------------------------------------------------------

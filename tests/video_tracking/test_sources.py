@@ -12,7 +12,7 @@ import pytest
 from belief_tracking import scenes, video
 from belief_tracking.config import TrackerConfig
 from belief_tracking.detections import Detections, read_detections, write_detections
-from belief_tracking.errors import VideoError
+from belief_tracking.errors import TrackingError, VideoError
 from belief_tracking.initiation import init_from_gt
 from belief_tracking.sources import FrameSource, open_source
 from belief_tracking.tracker import Tracker
@@ -131,6 +131,77 @@ def test_a_losslessly_encoded_video_gives_the_same_tracks(short_scene, tmp_path,
 def test_open_source_returns_an_open_source_as_it_is(short_scene):
     source = open_source(short_scene[0])
     assert open_source(source) is source and isinstance(source, FrameSource)
+
+
+# -- a source's own bookkeeping, on frames in memory -----------------------------------------------------
+def shades(count: int) -> np.ndarray:
+    """``count`` frames of 4 x 6 pixels, frame k all of grey level k."""
+    return np.arange(count, dtype=np.uint8)[:, None, None, None] * np.ones((1, 4, 6, 3), np.uint8)
+
+
+def test_frames_in_memory_are_a_source_of_their_size_at_25_fps():
+    source = open_source(shades(5))
+    assert (source.kind, source.name, source.width, source.height, source.count, source.fps) == \
+        ("frames", "frames", 6, 4, 5, 25.0)
+    assert [int(image[0, 0, 0]) for image in source] == [0, 1, 2, 3, 4]
+    assert source.decode_seconds == 0.0
+
+
+def test_a_scene_is_named_by_its_configuration():
+    class Scene:                                    # what open_source reads of a rendered scene
+        frames = shades(2)
+
+        class config:
+            name = "walk"
+
+    source = open_source(Scene())
+    assert source.name == "scene 'walk'" and source.count == 2
+
+
+def test_spread_picks_evenly_spaced_frames_including_the_first_and_the_last():
+    source = open_source(shades(10))
+    assert [int(image[0, 0, 0]) for image in source.spread(4)] == [0, 3, 6, 9]
+    assert [int(image[0, 0, 0]) for image in open_source(shades(7)).spread(3)] == [0, 3, 6]
+    assert [int(image[0, 0, 0]) for image in source.spread(1)] == [0]
+    assert list(source.spread(0)) == []
+
+
+def test_spread_takes_the_first_frames_when_the_length_is_unknown_and_asks_pick_when_given():
+    unknown = FrameSource(shades(6), name="stream", width=6, height=4, fps=25.0, count=None)
+    assert [int(image[0, 0, 0]) for image in unknown.spread(3)] == [0, 1, 2]
+    assert len(list(unknown.spread(10))) == 6                  # no more than there are
+    asked = []
+    picked = FrameSource([], name="files", width=6, height=4, fps=25.0, count=10,
+                         pick=lambda indices: asked.append(list(indices)) or iter(["frame"] * len(indices)))
+    assert list(picked.spread(4)) == ["frame"] * 4 and asked == [[0, 3, 6, 9]]
+
+
+def test_missing_counts_the_announced_frames_that_were_not_decoded():
+    announced = FrameSource([], name="video", width=6, height=4, fps=25.0, count=10)
+    assert [announced.missing(k) for k in (0, 7, 10, 12)] == [10, 3, 0, 0]
+    unknown = FrameSource([], name="stream", width=6, height=4, fps=25.0, count=None)
+    assert unknown.missing(3) == 0
+
+
+def test_a_source_reports_its_reader_s_decoding_time_and_closes_it_on_leaving_a_with_block():
+    class Reader:
+        decode_seconds = 1.5
+        closed = 0
+
+        def close(self):
+            self.closed += 1
+
+    reader = Reader()
+    with FrameSource([], name="video", width=6, height=4, fps=25.0, count=0, reader=reader) as source:
+        assert source.decode_seconds == 1.5 and reader.closed == 0
+    assert reader.closed == 1
+
+
+@pytest.mark.parametrize("frames", [np.zeros((4, 6, 3), np.uint8), np.zeros((2, 4, 6), np.uint8),
+                                    np.zeros((2, 4, 6, 3)), np.zeros((0, 4, 6, 3), np.uint8)])
+def test_frames_that_are_no_video_are_refused(frames):
+    with pytest.raises(TrackingError, match=r"frames must be a \(T, H, W, 3\) uint8 array"):
+        open_source(frames)
 
 
 # -- folders: order and laziness ------------------------------------------------------------------------
