@@ -47,7 +47,8 @@ class Detections:
         self.source = source
         frames: dict[int, np.ndarray] = {}
         for frame, rows in (by_frame or {}).items():
-            array = check_rows(np.asarray(rows, dtype=np.float64).reshape(-1, len(DETECTION_COLUMNS)),
+            # A copy: the rows are made read-only, which must not reach the caller's own array.
+            array = check_rows(np.array(rows, dtype=np.float64).reshape(-1, len(DETECTION_COLUMNS)),
                                f"{source}: frame {frame}")
             if len(array):
                 array.flags.writeable = False
