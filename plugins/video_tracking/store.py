@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .adaptive import AdaptiveConfig
 from .errors import InitError, TrackingError
 from .particles import CX, CY, LOG_SCALE, VX, VY, ParticleSet
 
@@ -102,7 +103,7 @@ class Track:
     birth_cy: float
     templates: dict[str, np.ndarray]
     initial_templates: dict[str, np.ndarray]
-    similarity: float = 0.8
+    similarity: float = AdaptiveConfig.rho0
     life: Life = field(default_factory=Life)
     last_frame: int | None = None
     planned: bool = False
@@ -110,7 +111,7 @@ class Track:
 
     @classmethod
     def born(cls, track_id: int, box, states: np.ndarray, templates: Mapping[str, np.ndarray], *,
-             similarity: float = 0.8, last_frame: int | None = None, planned: bool = False) -> Track:
+             similarity: float = AdaptiveConfig.rho0, last_frame: int | None = None, planned: bool = False) -> Track:
         """A new track at ``box`` ``x, y, w, h``, its particles ``states`` (N, 5) uniformly weighted (W-S1).
 
         ``templates`` become both its current and its initial templates; the estimate is the
