@@ -1,7 +1,10 @@
 """Image cues of the tracker: location, colour and foreground colour (SPEC B.2–B.4), and the background model."""
 
 import doctest
+import importlib
+import inspect
 import math
+import pkgutil
 
 import numpy as np
 import pytest
@@ -14,6 +17,7 @@ from belief_tracking.cues import (
     ColourConfig,
     ColourCue,
     Cue,
+    EdgeCue,
     ForegroundColourCue,
     LocationConfig,
     LocationCue,
@@ -21,7 +25,11 @@ from belief_tracking.cues import (
     bhattacharyya,
     colour_bins,
     make_cue,
+    score_cues,
+    template_similarity,
 )
+from belief_tracking.cues.base import log_gaussian
+from belief_tracking.cues.histograms import HISTOGRAM_BLOCK
 from belief_tracking.errors import TrackingError, UnknownCueError
 from belief_tracking.fusion import CueFusion
 
@@ -40,9 +48,24 @@ def scene_with_targets(height=100, width=140):
     return image, boxes
 
 
-def observation(image, boxes, foreground=None, previous=None):
+def red_target_mask(image):
+    """A foreground mask of :func:`scene_with_targets` that holds the red target only."""
+    mask = np.zeros(image.shape[:2], bool)
+    mask[20:60, 30:50] = True
+    return mask
+
+
+#: Two targets, (x, y, w, h), for the frames of random pixels.
+TWO_BOXES = np.array([[10.0, 10.0, 12.0, 24.0], [60.0, 30.0, 14.0, 28.0]])
+
+
+def observation(image, boxes, foreground=None, previous=None, cues=()):
+    """The frame with targets at ``boxes``, carrying the templates that the appearance ``cues`` build from them."""
     centres = boxes[:, :2] + boxes[:, 2:] / 2
-    return Observation(image, foreground, centres, boxes[:, 2:], np.zeros((0, 2)) if previous is None else previous)
+    templates = {cue.name: cue.build_templates(image, boxes, foreground) for cue in cues
+                 if isinstance(cue, AppearanceCue)}
+    return Observation(image, foreground, centres, boxes[:, 2:], np.zeros((0, 2)) if previous is None else previous,
+                       templates=templates)
 
 
 def states_at(*points, log_scale=0.0):
@@ -130,11 +153,12 @@ def test_location_d_max_is_floored_at_sigma():
 def test_particle_on_a_target_box_matches_its_template():
     image, boxes = scene_with_targets()
     cue = ColourCue()
-    cue.set_templates(image, boxes)
-    obs = observation(image, boxes)
+    obs = observation(image, boxes, cues=[cue])
+    slow = [slow_histogram(image, box[:2] + box[2:] / 2, box[2:], 8, (12, 24)) for box in boxes]
+    np.testing.assert_allclose(cue.templates(obs), slow, rtol=1e-12, atol=1e-15)
     states = states_at(*obs.centres)
     histograms = cue.histograms(obs, states, np.array([0, 1]))
-    np.testing.assert_allclose(histograms, cue.templates, atol=1e-15)
+    np.testing.assert_allclose(histograms, cue.templates(obs), atol=1e-15)
     scores = cue.log_likelihoods(obs, states, np.array([0, 1]))
     np.testing.assert_allclose(np.diag(scores[:, :2]), [0.0, 0.0], atol=1e-12)          # ρ = 1 → log p = 0
     np.testing.assert_allclose(scores[0, 1], -1 / (2 * 0.15 ** 2))                        # red vs blue: ρ = 0
@@ -145,8 +169,7 @@ def test_templates_of_a_textured_target_are_matched_exactly():
     image = rng.integers(0, 256, size=(80, 90, 3), dtype=np.uint8)
     boxes = np.array([[10.5, 7.25, 23.0, 41.0]])
     cue = ColourCue(ColourConfig(bins=4, samples=(9, 17)))
-    cue.set_templates(image, boxes)
-    scores = cue.log_likelihoods(observation(image, boxes), states_at([22.0, 27.75]), np.array([0]))
+    scores = cue.log_likelihoods(observation(image, boxes, cues=[cue]), states_at([22.0, 27.75]), np.array([0]))
     assert scores[0, 0] == pytest.approx(0.0, abs=1e-12)
     assert scores[0, 1] < -1.0
 
@@ -154,12 +177,11 @@ def test_templates_of_a_textured_target_are_matched_exactly():
 def test_a_box_on_another_colour_has_lower_similarity():
     image, boxes = scene_with_targets()
     cue = ColourCue()
-    cue.set_templates(image, boxes[:1])
-    obs = observation(image, boxes[:1])
+    obs = observation(image, boxes[:1], cues=[cue])
     # on the red target; half over it; on grey background
     states = states_at([40, 40], [50, 40], [80, 15])
     histograms = cue.histograms(obs, states, np.zeros(3, dtype=int))
-    rho = bhattacharyya(histograms, cue.templates)[:, 0]
+    rho = bhattacharyya(histograms, cue.templates(obs))[:, 0]
     assert rho[0] == pytest.approx(1.0) and 0.3 < rho[1] < 0.9 and rho[2] == 0.0
     scores = cue.log_likelihoods(obs, states, np.zeros(3, dtype=int))
     np.testing.assert_allclose(scores[:, 0], -(1 - rho) / (2 * 0.15 ** 2), atol=1e-12)   # W (16)-(17)
@@ -186,6 +208,13 @@ def test_vectorised_histograms_equal_a_particle_by_particle_loop(masked):
     slow = np.array([slow_histogram(image, states[p, :2], sizes[owner[p]] * np.exp(states[p, 4]), 4, (7, 10),
                                     mask if masked else None) for p in range(n)])
     np.testing.assert_allclose(fast, slow, rtol=1e-12, atol=1e-15)
+    # The templates are the same histograms of their boxes (a foreground one normalised to 1).
+    boxes = np.column_stack([rng.uniform(0, width - 5, 8), rng.uniform(0, height - 5, 8), rng.uniform(3, 25, (8, 2))])
+    slow = np.array([slow_histogram(image, box[:2] + box[2:] / 2, box[2:], 4, (7, 10), mask if masked else None)
+                     for box in boxes])
+    if masked:
+        slow /= slow.sum(axis=1, keepdims=True)
+    np.testing.assert_allclose(cue.build_templates(image, boxes, mask), slow, rtol=1e-12, atol=1e-15)
 
 
 def test_colour_bins_cut_each_channel_evenly():
@@ -199,14 +228,14 @@ def test_colour_bins_cut_each_channel_evenly():
 def test_false_alarm_histogram_excludes_the_target_colours():
     image, boxes = scene_with_targets()
     cue = ColourCue(ColourConfig())
-    cue.set_templates(image, boxes)
-    q_fa = cue.false_alarm_histogram(observation(image, boxes))
+    obs = observation(image, boxes, cues=[cue])
+    q_fa = cue.false_alarm_histogram(obs)
     red, blue, grey = (colour_bins(np.array([[c]], np.uint8), 8)[0, 0] for c in (RED, BLUE, GREY))
     assert q_fa.sum() == pytest.approx(1.0)
     assert q_fa[red] == 0.0 and q_fa[blue] == 0.0
     assert q_fa[grey] == pytest.approx(1.0)
     # a particle on the background is FA-like, one on a target is not
-    scores = cue.log_likelihoods(observation(image, boxes), states_at([10, 85], [40, 40]), np.array([0, 0]))
+    scores = cue.log_likelihoods(obs, states_at([10, 85], [40, 40]), np.array([0, 0]))
     assert scores[0, 2] == pytest.approx(0.0, abs=1e-12) and scores[0, 2] > scores[0, :2].max()
     assert scores[1, 2] == pytest.approx(-1 / (2 * 0.15 ** 2))
 
@@ -217,16 +246,14 @@ def test_false_alarm_histogram_removes_a_target_colour_everywhere():
     image[85:95, 5:25] = RED
     red = colour_bins(np.array([[RED]], np.uint8), 8)[0, 0]
     cue = ColourCue(ColourConfig())
-    cue.set_templates(image, boxes)
-    assert cue.false_alarm_histogram(observation(image, boxes))[red] == 0.0
+    assert cue.false_alarm_histogram(observation(image, boxes, cues=[cue]))[red] == 0.0
 
 
 def test_false_alarm_histogram_is_uniform_when_the_targets_fill_the_scene():
     image = np.full((20, 20, 3), RED, np.uint8)
     boxes = np.array([[0.0, 0.0, 20.0, 20.0]])
     cue = ColourCue(ColourConfig(bins=2))
-    cue.set_templates(image, boxes)
-    np.testing.assert_allclose(cue.false_alarm_histogram(observation(image, boxes)), np.full(8, 1 / 8))
+    np.testing.assert_allclose(cue.false_alarm_histogram(observation(image, boxes, cues=[cue])), np.full(8, 1 / 8))
 
 
 def test_false_alarm_histogram_ignores_rounding_residue():
@@ -238,22 +265,6 @@ def test_false_alarm_histogram_ignores_rounding_residue():
     assert (scene / scene.sum() - template > 0).any()
     q_fa = cues.false_alarm_histogram(scene, template[None, :])
     np.testing.assert_allclose(q_fa, np.full(6, 1 / 6))
-
-
-def test_targets_are_added_and_removed_in_order():
-    image, boxes = scene_with_targets()
-    cue = ColourCue()
-    assert cue.add_target(image, boxes[1]) == 0
-    assert cue.add_target(image, boxes[0]) == 1
-    both = cue.templates.copy()
-    cue.remove_target(0)
-    np.testing.assert_array_equal(cue.templates, both[1:])
-    with pytest.raises(TrackingError, match="no target 3"):
-        cue.remove_target(3)
-    with pytest.raises(ValueError):
-        cue.templates[0, 0] = 1.0                                         # the templates are read-only
-    cue.set_templates(image, boxes)
-    np.testing.assert_array_equal(cue.templates, both[::-1])
 
 
 # -- foreground-masked colour (L (16)-(17)) --------------------------------------------------------
@@ -269,8 +280,7 @@ def foreground_scene():
 def test_foreground_histogram_sums_to_the_kernel_weighted_foreground_fraction():
     image, mask, boxes = foreground_scene()
     cue = ForegroundColourCue(ColourConfig(samples=(10, 20)))
-    cue.set_templates(image, boxes, foreground=mask)
-    obs = observation(image, boxes, foreground=mask)
+    obs = observation(image, boxes, foreground=mask, cues=[cue])
     states = states_at([50, 50], [58, 60], [66, 82], [10, 10])
     histograms = cue.histograms(obs, states, np.zeros(4, dtype=int))
     # F by hand: the kernel weights of the sample points that land on the mask, over all weights
@@ -287,16 +297,15 @@ def test_foreground_histogram_sums_to_the_kernel_weighted_foreground_fraction():
 def test_foreground_normalisation_crushes_particles_that_cover_little_foreground():
     image, mask, boxes = foreground_scene()
     cue = ForegroundColourCue()
-    cue.set_templates(image, boxes, foreground=mask)
-    obs = observation(image, boxes, foreground=mask)
+    obs = observation(image, boxes, foreground=mask, cues=[cue])
     states = states_at([50, 50], [66, 82])                # on the target; over one corner of it
     histograms = cue.histograms(obs, states, np.zeros(2, dtype=int))
     coverage = histograms.sum(axis=1)
-    rho = bhattacharyya(histograms, cue.templates)[:, 0]
+    rho = bhattacharyya(histograms, cue.templates(obs))[:, 0]
     # all the foreground it sees is the target's red, yet ρ = √F (Cauchy–Schwarz bound reached) …
     np.testing.assert_allclose(rho, np.sqrt(coverage))
     # … whereas renormalising over the foreground pixels alone would call it a perfect match
-    assert bhattacharyya(histograms[1:] / coverage[1], cue.templates)[0, 0] == pytest.approx(1.0)
+    assert bhattacharyya(histograms[1:] / coverage[1], cue.templates(obs))[0, 0] == pytest.approx(1.0)
     scores = cue.log_likelihoods(obs, states, np.zeros(2, dtype=int))
     assert scores[0, 0] == pytest.approx(0.0, abs=1e-12)
     assert scores[0, 0] - scores[1, 0] > 10.0             # likelihood ratio above e^10
@@ -307,48 +316,45 @@ def test_foreground_template_is_normalised_and_falls_back_without_foreground():
     half = mask.copy()
     half[:, 50:] = False                                   # only the left half of the target is foreground
     wide = np.array([[30.0, 20.0, 40.0, 60.0]])                # the target with grey around it
-    cue = ForegroundColourCue()
-    cue.set_templates(image, wide, foreground=half)
-    plain = ColourCue()
-    plain.set_templates(image, wide)
+    background = [5.0, 5.0, 10.0, 10.0]                        # no foreground in that box
+    templates = ForegroundColourCue().build_templates(image, np.array([wide[0], background]), foreground=half)
+    plain = ColourCue().build_templates(image, np.array([wide[0], background]))
     red = colour_bins(np.array([[RED]], np.uint8), 8)[0, 0]
-    assert cue.templates.sum() == pytest.approx(1.0)
-    assert cue.templates[0, red] == pytest.approx(1.0)         # no grey: it is not foreground
-    assert plain.templates[0, red] < 0.9
-    plain = ColourCue()
-    plain.add_target(image, [5, 5, 10, 10])
-    assert cue.add_target(image, [5, 5, 10, 10], foreground=half) == 1     # no foreground in that box
-    np.testing.assert_array_equal(cue.templates[1], plain.templates[0])
+    assert templates.shape == (2, 512)
+    assert templates[0].sum() == pytest.approx(1.0)
+    assert templates[0, red] == pytest.approx(1.0)              # no grey: it is not foreground
+    assert plain[0, red] < 0.9
+    np.testing.assert_array_equal(templates[1], plain[1])       # the unmasked histogram
 
 
 def test_foreground_cue_needs_a_mask():
     image, mask, boxes = foreground_scene()
     cue = ForegroundColourCue()
     with pytest.raises(TrackingError, match="foreground mask"):
-        cue.set_templates(image, boxes)
-    cue.set_templates(image, boxes, foreground=mask)
+        cue.build_templates(image, boxes)
+    obs = observation(image, boxes)
+    obs = obs.with_templates({"foreground": cue.build_templates(image, boxes, foreground=mask)})
     with pytest.raises(TrackingError, match="Observation.foreground"):
-        cue.log_likelihoods(observation(image, boxes), states_at([50, 50]), np.array([0]))
+        cue.log_likelihoods(obs, states_at([50, 50]), np.array([0]))
+    with pytest.raises(TrackingError, match="Observation.foreground"):
+        cue.histograms(obs, states_at([50, 50]), np.array([0]))
 
 
 # -- all cues --------------------------------------------------------------------------------------
-def all_cues(image, boxes, mask):
-    colour, foreground = ColourCue(), ForegroundColourCue()
-    colour.set_templates(image, boxes)
-    foreground.set_templates(image, boxes, foreground=mask)
-    return [LocationCue(), colour, foreground]
+def all_cues():
+    return [LocationCue(), ColourCue(), ForegroundColourCue()]
 
 
 def test_shapes_are_particles_by_targets_plus_false_alarm():
     image, boxes = scene_with_targets()
     boxes = np.vstack([boxes, [[5.0, 70.0, 10.0, 20.0]]])
-    mask = np.zeros(image.shape[:2], bool)
-    mask[20:60, 30:50] = True
-    obs = observation(image, boxes, foreground=mask, previous=np.array([[40.0, 40.0], [100.0, 60.0]]))
+    mask = red_target_mask(image)
+    every_cue = all_cues()
+    obs = observation(image, boxes, foreground=mask, previous=np.array([[40.0, 40.0], [100.0, 60.0]]), cues=every_cue)
     rng = np.random.default_rng(0)
     states = np.column_stack([rng.uniform(0, 140, (30, 2)), np.zeros((30, 2)), rng.normal(0, 0.1, 30)])
     owner = rng.integers(0, 3, 30)
-    for cue in all_cues(image, boxes, mask):
+    for cue in every_cue:
         assert isinstance(cue, Cue)
         scores = cue.log_likelihoods(obs, states, owner)
         assert scores.shape == (30, 4) and np.isfinite(scores).all() and (scores <= 0).all()
@@ -357,13 +363,13 @@ def test_shapes_are_particles_by_targets_plus_false_alarm():
 
 def test_particles_outside_the_image_give_finite_values():
     image, boxes = scene_with_targets()
-    mask = np.zeros(image.shape[:2], bool)
-    mask[20:60, 30:50] = True
-    obs = observation(image, boxes, foreground=mask, previous=np.array([[40.0, 40.0]]))
+    mask = red_target_mask(image)
+    every_cue = all_cues()
+    obs = observation(image, boxes, foreground=mask, previous=np.array([[40.0, 40.0]]), cues=every_cue)
     states = states_at([-5, 40], [145, 90], [-1e6, -1e6], [1e6, 50], [70, -500])
     states = np.vstack([states, states_at([40, 40], log_scale=200.0), states_at([40, 40], log_scale=-200.0)])
     owner = np.zeros(len(states), dtype=int)
-    for cue in all_cues(image, boxes, mask):
+    for cue in every_cue:
         scores = cue.log_likelihoods(obs, states, owner)
         assert not np.isnan(scores).any() and not np.isposinf(scores).any(), cue.name
         if cue.name != "location":
@@ -373,8 +379,7 @@ def test_particles_outside_the_image_give_finite_values():
 def test_cue_outputs_feed_the_fusion():
     image, boxes = scene_with_targets()
     location, colour = LocationCue(), ColourCue()
-    colour.set_templates(image, boxes)
-    obs = observation(image, boxes, previous=np.array([[0.0, 0.0], [140.0, 100.0]]))
+    obs = observation(image, boxes, previous=np.array([[0.0, 0.0], [140.0, 100.0]]), cues=[colour])
     states = states_at([40, 40], [130, 10])                # on target 1; on the background, far from both
     owner = np.array([0, 0])
     result = CueFusion(2).fuse([location.log_likelihoods(obs, states, owner),
@@ -419,9 +424,19 @@ def test_bad_inputs_raise_clear_errors():
     image, boxes = scene_with_targets()
     obs = observation(image, boxes)
     cue = ColourCue()
-    cue.set_templates(image, boxes[:1])
-    with pytest.raises(TrackingError, match="holds 1 target templates but the observation has 2"):
-        cue.log_likelihoods(obs, states_at([40, 40]), np.array([0]))
+    one = cue.build_templates(image, boxes[:1])
+    rows = r"the colour templates must have one row per target \(2\), got shape "
+    with pytest.raises(TrackingError, match=rows + r"\(1, 512\)"):
+        Observation(image, None, obs.centres, obs.sizes, np.zeros((0, 2)), templates={"colour": one})
+    with pytest.raises(TrackingError, match=rows + r"\(512,\)"):
+        obs.with_templates({"colour": one[0]})
+    for read in (lambda: cue.log_likelihoods(obs, states_at([40, 40]), np.array([0])),
+                 lambda: cue.false_alarm_histogram(obs), lambda: cue.templates(obs)):
+        with pytest.raises(TrackingError, match=r"the colour cue needs the targets' templates: Observation\(templates"):
+            read()
+    coarse = obs.with_templates({"colour": ColourCue(ColourConfig(bins=4)).build_templates(image, boxes)})
+    with pytest.raises(TrackingError, match="the colour templates have 64 bins, the cue 512"):
+        cue.log_likelihoods(coarse, states_at([40, 40]), np.array([0]))
     with pytest.raises(TrackingError, match=r"states must have shape \(P, 5\)"):
         LocationCue().log_likelihoods(obs, np.zeros((3, 4)), np.zeros(3, dtype=int))
     with pytest.raises(TrackingError, match="owners must be target indices 0..1"):
@@ -433,9 +448,13 @@ def test_bad_inputs_raise_clear_errors():
     with pytest.raises(TrackingError, match="mask > 0"):
         Observation(image, np.zeros(image.shape[:2], np.uint8), obs.centres, obs.sizes, np.zeros((0, 2)))
     with pytest.raises(TrackingError, match="lies outside the 140x100 image"):
-        cue.add_target(image, [150, 10, 5, 5])
+        cue.build_templates(image, [[30, 20, 20, 40], [150, 10, 5, 5]])
     with pytest.raises(TrackingError, match="both must be positive"):
-        cue.add_target(image, [10, 10, 0, 5])
+        cue.build_templates(image, [[10, 10, 0, 5]])
+    with pytest.raises(TrackingError, match=r"\(H, W, 3\) uint8"):
+        cue.build_templates(image.astype(float), boxes)
+    with pytest.raises(TrackingError, match="mask > 0"):
+        ForegroundColourCue().build_templates(image, boxes, foreground=np.ones(image.shape[:2], np.uint8))
 
 
 # -- background model ------------------------------------------------------------------------------
@@ -490,70 +509,89 @@ def test_background_model_rejects_frames_of_another_shape():
 
 
 # -- docstring examples ----------------------------------------------------------------------------
-@pytest.mark.parametrize("module", [cues, background], ids=lambda m: m.__name__)
+#: The modules of the cues package that hold examples (similarity.py has none).
+CUE_MODULES = [module for module in (importlib.import_module(f"{cues.__name__}.{info.name}")
+                                     for info in pkgutil.iter_modules(cues.__path__))
+               if ">>>" in inspect.getsource(module)]
+
+
+@pytest.mark.parametrize("module", [cues, *CUE_MODULES, background], ids=lambda m: m.__name__)
 def test_docstring_examples(module):
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0 and result.failed == 0
 
 
 def test_the_bin_image_of_a_frame_is_computed_once_for_every_cue(monkeypatch):
-    import belief_tracking.cues as cues_module
+    from belief_tracking.cues import observation as observation_module
 
     calls = []
-    real = cues_module.colour_bins
-    monkeypatch.setattr(cues_module, "colour_bins", lambda image, bins: calls.append(bins) or real(image, bins))
-    image = np.full((40, 40, 3), 90, np.uint8)
-    obs = cues_module.Observation(image, np.ones((40, 40), bool), [[20.0, 20.0]], [[10.0, 10.0]], np.zeros((0, 2)))
+    real = observation_module.colour_bins
+    monkeypatch.setattr(observation_module, "colour_bins", lambda image, bins: calls.append(bins) or real(image, bins))
+    image, boxes = scene_with_targets()
+    mask = red_target_mask(image)
+    colour, foreground = ColourCue(), ForegroundColourCue()
+    obs = observation(image, boxes, foreground=mask, cues=[colour, foreground])  # templates: no observation
+    assert calls == []
     first = obs.colour_bins(8)
     assert obs.colour_bins(8) is first and calls == [8]
+    states, owner = states_at((40, 40), (100, 60)), np.array([0, 1])
+    for cue in (colour, foreground):
+        cue.log_likelihoods(obs, states, owner)
+        cue.histograms(obs, states, owner)
+        cue.false_alarm_histogram(obs)
+    score_cues([colour, foreground], obs, states, owner)
+    # A copy with other templates or with the frame's assignment shares the frame's features.
+    assert obs.with_templates(dict(obs.templates)).colour_bins(8) is first
+    assert obs.with_assignment(None).colour_bins(8) is first
+    assert calls == [8]
     obs.colour_bins(4)
     assert calls == [8, 4]
 
 
 @pytest.mark.parametrize("cue_type", [ColourCue, ForegroundColourCue])
 def test_scores_of_many_particles_are_built_block_by_block_without_changing_them(cue_type):
-    from belief_tracking.cues import HISTOGRAM_BLOCK, _log_gaussian, bhattacharyya
-
     rng = np.random.default_rng(5)
     image = rng.integers(0, 256, size=(80, 120, 3), dtype=np.uint8)
     mask = rng.random((80, 120)) < 0.5
     cue = cue_type(ColourConfig(samples=(6, 12)))
-    cue.set_templates(image, np.array([[10, 10, 12, 24], [60, 30, 14, 28]]), foreground=mask)
-    obs = Observation(image, mask, [[16.0, 22.0], [67.0, 44.0]], [[12.0, 24.0], [14.0, 28.0]], np.zeros((0, 2)))
+    obs = observation(image, TWO_BOXES, foreground=mask, cues=[cue])
     n = 2 * HISTOGRAM_BLOCK + 7
     states = np.column_stack([rng.uniform(0, 120, n), rng.uniform(0, 80, n), np.zeros((n, 2)), rng.normal(0, 0.1, n)])
     owner = rng.integers(0, 2, n)
-    references = np.concatenate([cue.templates, cue.false_alarm_histogram(obs)[None, :]])
-    whole = _log_gaussian(1.0 - bhattacharyya(cue.histograms(obs, states, owner), references), cue.config.sigma)
+    references = np.concatenate([cue.templates(obs), cue.false_alarm_histogram(obs)[None, :]])
+    np.testing.assert_array_equal(cue.references(obs, cue.frame_features(obs)), references)
+    whole = log_gaussian(1.0 - bhattacharyya(cue.histograms(obs, states, owner), references), cue.config.sigma)
     assert np.allclose(cue.log_likelihoods(obs, states, owner), whole, rtol=0, atol=1e-12)
 
 
 def test_cues_scored_together_score_as_each_alone_and_their_template_similarity_is_the_smallest_rho():
-    from belief_tracking.cues import HISTOGRAM_BLOCK, EdgeCue, score_cues, template_similarity
+    class CoarseForegroundCue(ForegroundColourCue):
+        """A second foreground cue, of other bins: its templates need a name of their own."""
+
+        name = "coarse foreground"
 
     rng = np.random.default_rng(8)
     image = rng.integers(0, 256, size=(80, 120, 3), dtype=np.uint8)
     image[:, :30] = 40                                  # a flat stripe: bins and edges the frame lacks elsewhere
     mask = rng.random((80, 120)) < 0.5
-    boxes = np.array([[10, 10, 12, 24], [60, 30, 14, 28]])
     cues = [ColourCue(ColourConfig(samples=(6, 12))), LocationCue(),
             ForegroundColourCue(ColourConfig(samples=(6, 12))), EdgeCue(),
-            ForegroundColourCue(ColourConfig(bins=4, samples=(6, 12)))]
-    for cue in cues:
-        if isinstance(cue, AppearanceCue):
-            cue.set_templates(image, boxes, foreground=mask)
+            CoarseForegroundCue(ColourConfig(bins=4, samples=(6, 12)))]
+    templates = observation(image, TWO_BOXES, foreground=mask, cues=cues).templates
+    assert len(templates) == 4
     n = HISTOGRAM_BLOCK + 9
     states = np.column_stack([rng.uniform(-5, 125, n), rng.uniform(-5, 85, n), np.zeros((n, 2)),
                               rng.normal(0, 0.1, n)])
     owner = rng.integers(0, 2, n)
     fresh = lambda: Observation(image, mask, [[16.0, 22.0], [67.0, 44.0]], [[12.0, 24.0], [14.0, 28.0]],  # noqa: E731
-                                np.zeros((0, 2)))
+                                np.zeros((0, 2)), templates=templates)
     together = score_cues(cues, fresh(), states, owner)
     for cue, scores in zip(cues, together):
         np.testing.assert_allclose(scores, cue.log_likelihoods(fresh(), states, owner), rtol=0, atol=1e-12)
     appearance = [cue for cue in cues if isinstance(cue, AppearanceCue)]
     obs = fresh()
-    rho = [bhattacharyya(cue.histograms(obs, states, owner), cue.templates)[np.arange(n), owner] for cue in appearance]
+    rho = [bhattacharyya(cue.histograms(obs, states, owner), cue.templates(obs))[np.arange(n), owner]
+           for cue in appearance]
     np.testing.assert_allclose(template_similarity(appearance, fresh(), states, owner), np.min(rho, axis=0),
                                rtol=0, atol=1e-12)
     with pytest.raises(TrackingError, match="at least one"):
@@ -607,12 +645,9 @@ def test_histograms_of_a_compact_bin_image_equal_those_of_an_intp_one():
 
 def test_both_colour_cues_count_the_scene_once_per_frame(monkeypatch):
     image, boxes = scene_with_targets()
-    mask = np.zeros(image.shape[:2], bool)
-    mask[20:60, 30:50] = True
+    mask = red_target_mask(image)
     colour, foreground = ColourCue(), ForegroundColourCue()
-    colour.set_templates(image, boxes)
-    foreground.set_templates(image, boxes, foreground=mask)
-    obs = observation(image, boxes, foreground=mask)
+    obs = observation(image, boxes, foreground=mask, cues=[colour, foreground])
     pixels = image.shape[0] * image.shape[1]
     scene_counts = []
     real = np.bincount
@@ -622,14 +657,19 @@ def test_both_colour_cues_count_the_scene_once_per_frame(monkeypatch):
             scene_counts.append(1)
         return real(x, *args, **kwargs)
 
-    monkeypatch.setattr(cues.np, "bincount", counting)
+    monkeypatch.setattr(np, "bincount", counting)
     states = states_at((40, 40), (100, 60))
     colour.log_likelihoods(obs, states, np.array([0, 1]))
     foreground.log_likelihoods(obs, states, np.array([0, 1]))
     monkeypatch.undo()
     assert len(scene_counts) == 1
     np.testing.assert_array_equal(colour.false_alarm_histogram(obs),
-                                  colour.false_alarm_histogram(observation(image, boxes, foreground=mask)))
+                                  colour.false_alarm_histogram(observation(image, boxes, foreground=mask,
+                                                                           cues=[colour])))
+    # The counts are the frame's, kept once: the same read-only array however often they are asked for.
+    counts = obs.scene_counts(obs.colour_bins(8), None, 512)
+    np.testing.assert_array_equal(counts, np.bincount(colour_bins(image, 8).ravel(), minlength=512))
+    assert obs.scene_counts(obs.colour_bins(8), None, 512) is counts and not counts.flags.writeable
 
 
 def test_background_masks_of_successive_frames_are_separate_arrays():

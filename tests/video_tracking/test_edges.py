@@ -6,10 +6,8 @@ import cv2
 import numpy as np
 import pytest
 
-from belief_tracking import cues as cues_module
 from belief_tracking.cues import (
     CUES,
-    HISTOGRAM_BLOCK,
     AppearanceCue,
     ColourConfig,
     ColourCue,
@@ -22,7 +20,10 @@ from belief_tracking.cues import (
     kernel_histograms,
     make_cue,
     orientation_bins,
+    template_similarity,
 )
+from belief_tracking.cues import observation as observation_module
+from belief_tracking.cues.histograms import HISTOGRAM_BLOCK
 from belief_tracking.errors import TrackingError
 
 SIGMA = 0.15
@@ -51,9 +52,12 @@ def target_scene():
     return grey_image(values), np.array([[40.0, 30.0, 20.0, 30.0]])
 
 
-def observe(image, boxes, foreground=None):
+def observe(image, boxes, foreground=None, cues=()):
+    """The frame with targets at ``boxes``, carrying the templates that ``cues`` build from them."""
     boxes = np.asarray(boxes, dtype=np.float64)
-    return Observation(image, foreground, boxes[:, :2] + boxes[:, 2:] / 2, boxes[:, 2:], np.zeros((0, 2)))
+    templates = {cue.name: cue.build_templates(image, boxes, foreground) for cue in cues}
+    return Observation(image, foreground, boxes[:, :2] + boxes[:, 2:] / 2, boxes[:, 2:], np.zeros((0, 2)),
+                       templates=templates)
 
 
 def particles(*centres, log_scale=0.0):
@@ -147,22 +151,24 @@ def test_gradients_match_opencv_sobel_with_replicated_borders():
 
 def test_the_orientation_images_of_a_frame_are_computed_once_per_setting(monkeypatch):
     calls = []
-    real = cues_module.orientation_bins
-    monkeypatch.setattr(cues_module, "orientation_bins",
+    real = observation_module.orientation_bins
+    monkeypatch.setattr(observation_module, "orientation_bins",
                         lambda image, *args, **kwargs: calls.append(args + tuple(kwargs.values()))
                         or real(image, *args, **kwargs))
     image, boxes = target_scene()
-    obs = observe(image, boxes)
+    cue = EdgeCue(EdgeConfig(samples=(6, 12)))
+    obs = observe(image, boxes, cues=[cue])                                  # templates: no observation
+    assert calls == []
     first = obs.orientation_bins(16, False, 10.0)
     assert obs.orientation_bins(16, False, 10.0) is first and len(calls) == 1
     obs.orientation_bins(16, True, 10.0)
     obs.orientation_bins(16, False, 5.0)
     assert len(calls) == 3
-    cue = EdgeCue(EdgeConfig(samples=(6, 12)))
-    cue.set_templates(image, boxes)                                          # templates: no observation
     calls.clear()
     cue.log_likelihoods(obs, particles((50, 45)), np.array([0]))
     cue.histograms(obs, particles((50, 45)), np.array([0]))
+    cue.false_alarm_histogram(obs)
+    assert obs.with_templates(dict(obs.templates)).orientation_bins(16, False, 10.0) is first
     assert calls == []                                                        # the default setting is memoised
 
 
@@ -224,9 +230,8 @@ def test_pixel_weights_of_the_wrong_shape_are_refused():
 def test_a_particle_on_the_template_box_scores_rho_one_and_a_flat_box_rho_zero():
     image, boxes = target_scene()
     cue = EdgeCue(EdgeConfig(samples=(10, 15)))
-    cue.set_templates(image, boxes)
-    assert np.isclose(cue.templates.sum(), 1.0)
-    obs = observe(image, boxes)
+    obs = observe(image, boxes, cues=[cue])
+    assert np.isclose(cue.templates(obs).sum(), 1.0)
     states = particles((50, 45), (100, 15))                                 # on the target; on the flat dark area
     hist = cue.histograms(obs, states, np.array([0, 0]))
     assert np.isclose(hist[0].sum(), 1.0) and np.array_equal(hist[1], np.zeros(16))
@@ -239,8 +244,7 @@ def test_a_particle_on_the_template_box_scores_rho_one_and_a_flat_box_rho_zero()
 def test_a_shifted_box_scores_lower_the_further_it_moves():
     image, boxes = target_scene()
     cue = EdgeCue(EdgeConfig(samples=(20, 30)))                             # one sample per pixel
-    cue.set_templates(image, boxes)
-    obs = observe(image, boxes)
+    obs = observe(image, boxes, cues=[cue])
     shifts = [0, 1, 3, 6]
     logs = cue.log_likelihoods(obs, particles(*[(50 + s, 45) for s in shifts]), np.zeros(4, int))[:, 0]
     assert abs(logs[0]) < 1e-12
@@ -254,14 +258,13 @@ def test_the_false_alarm_histogram_is_the_magnitude_weighted_scene_without_the_t
     values[65:85, 5:35] = 20 + 3 * (2 * x + y)                             # a ramp: θ = atan2(1, 2), bin 1
     image = grey_image(values)
     cue = EdgeCue(EdgeConfig(samples=(10, 15)))
-    cue.set_templates(image, boxes)
-    obs = observe(image, boxes)
+    obs = observe(image, boxes, cues=[cue])
     bins, weights = orientation_bins(image)
     scene = np.bincount(bins.ravel(), weights.ravel(), minlength=16)
-    expected = false_alarm_histogram(scene, cue.templates)
+    expected = false_alarm_histogram(scene, cue.templates(obs))
     q_fa = cue.false_alarm_histogram(obs)
     assert np.allclose(q_fa, expected, rtol=0, atol=1e-15) and np.isclose(q_fa.sum(), 1.0)
-    assert cue.templates[0, 1] == 0 and q_fa[1] > 0.2                        # the ramp is where FA lies
+    assert cue.templates(obs)[0, 1] == 0 and q_fa[1] > 0.2                  # the ramp is where FA lies
     logs = cue.log_likelihoods(obs, particles((50, 45), (20, 75)), np.array([0, 0]))
     assert logs[0, 0] > logs[0, 1]                                           # the target is θ1
     assert logs[1, 1] > logs[1, 0]                                           # the ramp is FA
@@ -273,9 +276,8 @@ def test_the_false_alarm_histogram_is_the_magnitude_weighted_scene_without_the_t
 def test_a_frame_without_edges_gives_a_uniform_false_alarm_and_finite_scores():
     image = grey_image(np.full((40, 50), 77))
     cue = EdgeCue(EdgeConfig(samples=(6, 12)))
-    cue.set_templates(image, [[10, 10, 10, 20]])
-    assert np.array_equal(cue.templates, np.zeros((1, 16)))                 # no edge in the box
-    obs = observe(image, [[10, 10, 10, 20]])
+    obs = observe(image, [[10, 10, 10, 20]], cues=[cue])
+    assert np.array_equal(cue.templates(obs), np.zeros((1, 16)))            # no edge in the box
     assert np.array_equal(cue.false_alarm_histogram(obs), np.full(16, 1 / 16))
     assert np.allclose(cue.log_likelihoods(obs, particles((15, 20), (30, 20)), np.array([0, 0])), FLAT)
 
@@ -286,8 +288,7 @@ def test_histograms_built_block_by_block_equal_the_whole_batch():
     image[:, :30] = 60                                                       # some boxes see no edge at all
     boxes = np.array([[40, 10, 12, 24], [80, 30, 14, 28]])
     cue = EdgeCue(EdgeConfig(samples=(6, 12)))
-    cue.set_templates(image, boxes)
-    obs = observe(image, boxes)
+    obs = observe(image, boxes, cues=[cue])
     n = 2 * HISTOGRAM_BLOCK + 7
     states = np.column_stack([rng.uniform(0, 120, n), rng.uniform(0, 80, n), np.zeros((n, 2)),
                               rng.normal(0, 0.3, n)])
@@ -299,7 +300,7 @@ def test_histograms_built_block_by_block_equal_the_whole_batch():
     sums = hist.sum(axis=1)
     edged = sums > 0
     assert np.allclose(sums[edged], 1.0) and 0.5 < edged.mean() < 0.95
-    references = np.concatenate([cue.templates, cue.false_alarm_histogram(obs)[None, :]])
+    references = np.concatenate([cue.templates(obs), cue.false_alarm_histogram(obs)[None, :]])
     whole = (0.0 - (1.0 - bhattacharyya(hist, references))) / (2 * SIGMA ** 2)
     logs = cue.log_likelihoods(obs, states, owner)
     assert logs.shape == (n, 3) and np.isfinite(logs).all()
@@ -312,7 +313,8 @@ def test_the_registry_builds_the_edge_cue():
     cue = make_cue("edges", bins=8, min_gradient=4)
     assert isinstance(cue, EdgeCue) and isinstance(cue, AppearanceCue) and cue.name == "edges"
     assert cue.config == EdgeConfig(bins=8, min_gradient=4.0)
-    assert cue.templates.shape == (0, 8)
+    image, boxes = target_scene()
+    assert cue.build_templates(image, boxes).shape == (1, 8)
     assert make_cue("edges").config == EdgeConfig(16, 0.15, (12, 24), 10.0)
     with pytest.raises(TrackingError, match="no option fa_mode; its options are bins, sigma, samples, min_gradient"):
         make_cue("edges", fa_mode="gate")
@@ -337,82 +339,72 @@ def test_bad_edge_settings_are_refused_naming_the_field(build, message):
         build()
 
 
-# -- template hooks for the update of C (16) -----------------------------------------------------
-def two_target_cue(cue_type):
+# -- templates: built by the cue, kept by the tracks, read from the observation -------------------
+def two_target_scene(cue_type):
+    """A cue of ``cue_type`` and a frame with two targets (a foreground mask over all of it)."""
     image = np.full((60, 90, 3), 30, np.uint8)
     image[10:40, 10:25] = (0, 0, 230)
+    image[10:40, 16:19] = 90                      # a stripe down the first target, a band across the second
     image[15:45, 50:65] = (200, 180, 0)
     image[25:28, 50:65] = 90
     boxes = np.array([[10, 10, 15, 30], [50, 15, 15, 30]])
     config = EdgeConfig(samples=(6, 12)) if cue_type is EdgeCue else ColourConfig(bins=4, samples=(6, 12))
-    cue = cue_type(config)
-    cue.set_templates(image, boxes, foreground=np.ones((60, 90), bool))
-    return cue, image, boxes
+    return cue_type(config), image, boxes, np.ones((60, 90), bool)
 
 
 @pytest.mark.parametrize("cue_type", [ColourCue, ForegroundColourCue, EdgeCue])
-def test_replace_template_normalises_and_leaves_the_initial_templates(cue_type):
-    cue, image, boxes = two_target_cue(cue_type)
-    built = cue.templates.copy()
-    assert np.array_equal(cue.initial_templates, built)
-    snapshot = cue.templates
-    n_bins = built.shape[1]
-    new = np.arange(n_bins, dtype=float)
-    cue.replace_template(1, new)
-    assert np.allclose(cue.templates[1], new / new.sum()) and np.isclose(cue.templates[1].sum(), 1.0)
-    assert np.array_equal(cue.templates[0], built[0])
-    assert np.array_equal(cue.initial_templates, built)
-    assert np.array_equal(snapshot, built)                                   # a snapshot handed out stays put
-    with pytest.raises(ValueError):
-        cue.initial_templates[0, 0] = 1.0
-    with pytest.raises(ValueError):
-        cue.templates[0, 0] = 1.0
-    cue.replace_template(np.int64(0), 3 * new)
-    assert np.allclose(cue.templates, [new / new.sum()] * 2)
+def test_the_templates_of_several_boxes_equal_those_built_one_at_a_time(cue_type):
+    cue, image, boxes, mask = two_target_scene(cue_type)
+    together = cue.build_templates(image, boxes, foreground=mask)
+    assert together.shape == (2, cue.config.n_bins) and np.allclose(together.sum(axis=1), 1.0)
+    alone = np.concatenate([cue.build_templates(image, box[None, :], foreground=mask) for box in boxes])
+    if cue_type is EdgeCue:         # Σ K · g of a box is summed in another order beside other boxes
+        np.testing.assert_allclose(together, alone, rtol=0, atol=1e-15)
+    else:                           # Σ K is the grid's, whatever the boxes
+        np.testing.assert_array_equal(together, alone)
+    assert np.array_equal(cue.build_templates(image, boxes[::-1], foreground=mask), together[::-1])  # in box order
+    assert not np.allclose(together[0], together[1])
 
 
-@pytest.mark.parametrize("cue_type", [ColourCue, EdgeCue])
-def test_initial_templates_follow_remove_and_add_target(cue_type):
-    cue, image, boxes = two_target_cue(cue_type)
-    built = cue.templates.copy()
-    n_bins = built.shape[1]
-    cue.replace_template(1, np.ones(n_bins))
-    cue.remove_target(0)
-    assert np.array_equal(cue.initial_templates, built[1:])
-    assert np.allclose(cue.templates, np.full((1, n_bins), 1 / n_bins))
-    assert cue.add_target(image, boxes[0], foreground=np.ones((60, 90), bool)) == 1
-    assert np.array_equal(cue.initial_templates, built[[1, 0]])
-    assert np.array_equal(cue.templates[1], built[0])
-    cue.set_templates(image, boxes)
-    assert np.array_equal(cue.initial_templates, built) and np.array_equal(cue.templates, built)
+@pytest.mark.parametrize("cue_type", [ColourCue, ForegroundColourCue, EdgeCue])
+def test_scoring_reads_the_templates_of_the_observation_and_never_changes_them(cue_type):
+    cue, image, boxes, mask = two_target_scene(cue_type)
+    obs = observe(image, boxes, mask, cues=[cue])
+    built = obs.templates[cue.name].copy()
+    states, owner = particles((17.5, 25), (57.5, 30), (40, 50)), np.array([0, 1, 1])
+    cue.log_likelihoods(obs, states, owner)
+    cue.false_alarm_histogram(obs)
+    template_similarity([cue], obs, states, owner)
+    assert np.array_equal(obs.templates[cue.name], built) and np.array_equal(cue.templates(obs), built)
+    # Templates built again are new arrays: the ones handed out before stay put.
+    assert not np.shares_memory(cue.build_templates(image, boxes, foreground=mask), obs.templates[cue.name])
+    # Other templates make another observation; this one still reads its own.
+    swapped = obs.with_templates({cue.name: built[::-1]})
+    assert np.array_equal(cue.templates(swapped), built[::-1]) and np.array_equal(cue.templates(obs), built)
+    assert swapped._features is obs._features
+    on_own = cue.log_likelihoods(obs, states[:2], owner[:2])
+    on_swapped = cue.log_likelihoods(swapped, states[:2], owner[:2])
+    assert np.allclose(np.diag(on_own[:, :2]), 0.0, atol=1e-12) and (np.diag(on_swapped[:, :2]) < -1).all()
+    # The cue holds its settings and nothing of the targets.
+    assert vars(cue) == {"config": cue.config} and repr(cue) == f"{cue_type.__name__}({cue.config!r})"
 
 
-@pytest.mark.parametrize("index, histogram, message", [
-    (2, None, "no target 2 to replace"),
-    (-1, None, "no target -1 to replace"),
-    (True, None, "no target True to replace"),
-    (0, np.ones(15), r"must have shape \(16,\), got \(15,\)"),
-    (0, np.ones((1, 16)), r"must have shape \(16,\)"),
-    (0, np.r_[np.ones(15), -1.0], "finite and non-negative"),
-    (0, np.r_[np.ones(15), np.nan], "finite and non-negative"),
-    (0, np.zeros(16), "positive sum"),
-    (0, "not a histogram", "array of 16 numbers"),
-])
-def test_replace_template_refuses_bad_input(index, histogram, message):
-    cue, _, _ = two_target_cue(EdgeCue)
-    before = cue.templates.copy()
-    with pytest.raises(TrackingError, match=message):
-        cue.replace_template(index, np.ones(16) if histogram is None else histogram)
-    assert np.array_equal(cue.templates, before)
-
-
-def test_a_replaced_template_is_what_particles_are_scored_against():
+def test_a_new_template_is_what_particles_are_scored_against():
     image, boxes = target_scene()
     cue = EdgeCue(EdgeConfig(samples=(10, 15)))
-    cue.set_templates(image, boxes)
-    obs = observe(image, boxes)
+    obs = observe(image, boxes, cues=[cue])
     moved = particles((55, 49))
     assert cue.log_likelihoods(obs, moved, np.array([0]))[0, 0] < -1
-    cue.replace_template(0, cue.histograms(obs, moved, np.array([0]))[0])
-    assert abs(cue.log_likelihoods(obs, moved, np.array([0]))[0, 0]) < 1e-12
-    assert cue.log_likelihoods(obs, particles((50, 45)), np.array([0]))[0, 0] < -1
+    followed = obs.with_templates({"edges": cue.histograms(obs, moved, np.array([0]))})
+    assert abs(cue.log_likelihoods(followed, moved, np.array([0]))[0, 0]) < 1e-12
+    assert cue.log_likelihoods(followed, particles((50, 45)), np.array([0]))[0, 0] < -1
+
+
+def test_no_box_gives_no_histogram_with_pixel_weights_too():
+    image = np.zeros((20, 30, 3), np.uint8)
+    image[5:15, 10:20] = 200
+    cue = EdgeCue(EdgeConfig(bins=8))
+    assert cue.build_templates(image, np.zeros((0, 4))).shape == (0, 8)
+    obs = Observation(image, None, [[15.0, 10.0]], [[10.0, 10.0]], np.zeros((0, 2)),
+                      templates={"edges": cue.build_templates(image, [[10, 5, 10, 10]])})
+    assert cue.histograms(obs, np.zeros((0, 5)), np.zeros(0, np.intp)).shape == (0, 8)

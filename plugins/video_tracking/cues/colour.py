@@ -177,10 +177,9 @@ class ColourCue:
         return sample_counts(slots, sampling, width, pixel_weights=features[1])
 
     def false_alarm_histogram(self, obs: Observation) -> np.ndarray:
-        """q_FA of this frame, shape (B,) (W (18)); A_j = w_j · h_j from ``obs.sizes``.
+        """q_FA of this frame, shape (B,) (W (18)): the scene's bins that the targets' templates do not explain.
 
-        With pixel weights, the scene counts are the weights summed per bin, and A_j is the
-        weight within target j's box (``obs.sizes`` at ``obs.centres``).
+        With pixel weights, the scene counts are the weights summed per bin.
         """
         return self.references(obs, self.frame_features(obs))[-1]
 

@@ -392,7 +392,7 @@ def sample_counts(slots: np.ndarray, sampling: Sampling, width: int, foreground:
     sample_weights = sampling.weights
     if pixel_weights is not None:
         sample_weights = sample_weights * np.take(np.ravel(pixel_weights), sampling.pixels).ravel()
-        totals = sample_weights.reshape(-1, n_boxes).sum(axis=0)                   # 1 / f, box by box
+        totals = sample_weights.reshape(sampling.pixels.shape).sum(axis=0)         # 1 / f, box by box
     if foreground is not None:
         counted = np.take(np.ravel(foreground), sampling.pixels)
         if sampling.inside is not None:
