@@ -30,9 +30,12 @@ form, with β = ρ[q_init, p_cur] weighing the initial template (SPEC B.5, varia
 
 :class:`AdaptiveWeighting` is C's method as a weighting strategy of the tracker
 (:mod:`belief_tracking.weighting`): each frame it computes the confidences λ from the
-cues' scores and mixes the product and sum rules with each target's ρ_{t−1}.  The total
+cues' scores and mixes the product and sum rules with each target's ρ_{t−1}, read from the
+evidence.  :class:`SumWeighting` and :class:`ProductWeighting` are C (14)'s two terms on
+their own, with equal weights.  The strategies trust the evidence the tracker built and call
+the kernels below directly; the public functions check their inputs first.  The total
 similarity itself, the occlusion test and the template update run after the estimate, in
-:mod:`belief_tracking.appearance`, which keeps ρ.
+:mod:`belief_tracking.appearance`, which writes ρ into each track's record.
 
 Examples
 --------
