@@ -184,48 +184,65 @@ def _cmd_track(args: argparse.Namespace) -> int:
 
 
 def _track(args: argparse.Namespace) -> int:
-    from . import scenes
     from .config import TrackerConfig
-    from .errors import TrackingError, VideoError
+
+    _output_dir(args.out)
+    config = TrackerConfig.from_settings(_settings(args), "belief track")
+    summary = _track_demo(args, config) if args.demo else _track_source(args, config)
+    _report(args, summary)
+    return 0
+
+
+def _track_demo(args: argparse.Namespace, config):
+    """``belief track --demo``: the demo scene, tracked automatically and scored against its ground truth."""
+    from . import scenes
+    from .errors import TrackingError
+    from .runner import run
+
+    if args.source is not None or args.init_from_gt is not None or args.init is not None or args.gt is not None:
+        raise TrackingError("--demo takes no SOURCE, --init, --init-from-gt or --gt")
+    scene = scenes.render(scenes.demo(args.seed))
+    gt = scene.ground_truth
+    height, width = scene.frames.shape[1:3]
+    detections = _detections(args, len(scene), width, height)
+    extra = {"gt.txt": lambda path: scenes.write_gt(path, gt, visibility=scene.visibility),
+             "scene.avi": lambda path: scenes.write_video(path, scene)}
+    # The tracker finds the people itself, as on a user's video; the ground truth only scores it.
+    return run(scene, None, config, args.out, args.seed, write_video=not args.no_video,
+               progress=not args.no_progress, gt=gt, extra_outputs=extra, detections=detections)
+
+
+def _track_source(args: argparse.Namespace, config):
+    """``belief track SOURCE``: with an init file, a ground truth's births and deaths, or neither."""
+    from .errors import TrackingError
     from .initiation import init_from_gt, read_init_boxes
     from .runner import run
     from .sources import open_source
 
-    _output_dir(args.out)
-    config = TrackerConfig.from_settings(_settings(args), "belief track")
-    progress = not args.no_progress
+    if args.source is None:
+        raise TrackingError("give a SOURCE to track (a video, a folder of images, an image pattern or a "
+                            "MOTChallenge sequence folder), or --demo")
+    plan, gt = None, args.gt
+    if args.init_from_gt is not None:
+        plan = init_from_gt(args.init_from_gt)
+        gt = gt if gt is not None else args.init_from_gt
+    elif args.init is not None:
+        plan = read_init_boxes(args.init)
+    frames = open_source(args.source)
+    try:
+        # The detection file is checked against the source's length and size, naming its lines.
+        detections = _detections(args, frames.count, frames.width, frames.height)
+    except BaseException:
+        frames.close()
+        raise
+    return run(frames, plan, config, args.out, args.seed, write_video=not args.no_video,
+               progress=not args.no_progress, gt=gt, detections=detections)
 
-    if args.demo:
-        if args.source is not None or args.init_from_gt is not None or args.init is not None or args.gt is not None:
-            raise TrackingError("--demo takes no SOURCE, --init, --init-from-gt or --gt")
-        scene = scenes.render(scenes.demo(args.seed))
-        gt = scene.ground_truth
-        height, width = scene.frames.shape[1:3]
-        detections = _detections(args, len(scene), width, height)
-        extra = {"gt.txt": lambda path: scenes.write_gt(path, gt, visibility=scene.visibility),
-                 "scene.avi": lambda path: scenes.write_video(path, scene)}
-        # The tracker finds the people itself, as on a user's video; the ground truth only scores it.
-        summary = run(scene, None, config, args.out, args.seed, write_video=not args.no_video, progress=progress,
-                      gt=gt, extra_outputs=extra, detections=detections)
-    else:
-        if args.source is None:
-            raise TrackingError("give a SOURCE to track (a video, a folder of images, an image pattern or a "
-                                "MOTChallenge sequence folder), or --demo")
-        plan, gt = None, args.gt
-        if args.init_from_gt is not None:
-            plan = init_from_gt(args.init_from_gt)
-            gt = gt if gt is not None else args.init_from_gt
-        elif args.init is not None:
-            plan = read_init_boxes(args.init)
-        frames = open_source(args.source)
-        try:
-            # The detection file is checked against the source's length and size, naming its lines.
-            detections = _detections(args, frames.count, frames.width, frames.height)
-        except BaseException:
-            frames.close()
-            raise
-        summary = run(frames, plan, config, args.out, args.seed, write_video=not args.no_video,
-                      progress=progress, gt=gt, detections=detections)
+
+def _report(args: argparse.Namespace, summary) -> None:
+    """Print the run's speed and scores; a video that decoded fewer frames than announced is then an error."""
+    from .errors import VideoError
+
     print(f"tracked {summary.frames} frames: {summary.tracking_fps:.1f} fps tracking, "
           f"{summary.overall_fps:.1f} fps overall; outputs in {args.out}")
     if summary.scores is not None:
@@ -238,7 +255,24 @@ def _track(args: argparse.Namespace) -> int:
         raise VideoError(f"{args.source}: decoded {summary.frames} of the {summary.expected_frames} frames the "
                          f"file announces (truncated or corrupt after frame {summary.frames}); the outputs of "
                          f"those {summary.frames} frames are in {args.out}")
-    return 0
+
+
+#: The description of ``belief track --help``.
+TRACK_DESCRIPTION = ("Track targets in a video (a video file, a folder of images, an image pattern such as "
+                     "img1/%06d.jpg, or a MOTChallenge sequence folder with its seqinfo.ini): one particle filter "
+                     "per target, each particle weighted by "
+                     "fusing colour, location, foreground and edge cues over {t1..tN, FA} with a belief-function "
+                     "rule (or the adaptive, sum or product fusion). Without an init file, tracks start on "
+                     "detections (--detections) or foreground blobs that persist, are hidden while nothing supports "
+                     "them, take back their id when they are seen again, and end when they leave. Writes tracks.txt "
+                     "(MOTChallenge), diagnostics.csv, diagnostics.png, annotated.avi and summary.json into "
+                     "--out, and removes those of an earlier run there that this run does not write. With --demo, "
+                     "renders a synthetic scene, tracks it automatically and prints its scores against the scene's "
+                     "ground truth. Exit status: 0 when the whole source was tracked; 1 on bad input (one line "
+                     "on standard error, no output left), or when a video decodes fewer frames than its container "
+                     "announces (truncated or corrupt: the outputs of the decoded frames are kept, and the line "
+                     "says how many frames of how many); 143 when ended by SIGTERM and 130 by Ctrl-C, with no "
+                     "output of the run left.")
 
 
 def register(subparsers: Any) -> None:
@@ -252,23 +286,19 @@ def register(subparsers: Any) -> None:
     >>> args.source, args.init, args.particles, args.seed, args.detections
     ('v.avi', 'boxes.csv', 30, 0, None)
     """
-    p = subparsers.add_parser(
-        "track", help="track people in a video with the DSmT multi-cue particle filter",
-        description="Track targets in a video (a video file, a folder of images, an image pattern such as "
-                    "img1/%06d.jpg, or a MOTChallenge sequence folder with its seqinfo.ini): one particle filter "
-                    "per target, each particle weighted by "
-                    "fusing colour, location, foreground and edge cues over {t1..tN, FA} with a belief-function "
-                    "rule (or the adaptive, sum or product fusion). Without an init file, tracks start on "
-                    "detections (--detections) or foreground blobs that persist, are hidden while nothing supports "
-                    "them, take back their id when they are seen again, and end when they leave. Writes tracks.txt "
-                    "(MOTChallenge), diagnostics.csv, diagnostics.png, annotated.avi and summary.json into "
-                    "--out, and removes those of an earlier run there that this run does not write. With --demo, "
-                    "renders a synthetic scene, tracks it automatically and prints its scores against the scene's "
-                    "ground truth. Exit status: 0 when the whole source was tracked; 1 on bad input (one line "
-                    "on standard error, no output left), or when a video decodes fewer frames than its container "
-                    "announces (truncated or corrupt: the outputs of the decoded frames are kept, and the line "
-                    "says how many frames of how many); 143 when ended by SIGTERM and 130 by Ctrl-C, with no "
-                    "output of the run left.")
+    p = subparsers.add_parser("track", help="track people in a video with the DSmT multi-cue particle filter",
+                              description=TRACK_DESCRIPTION)
+    _add_track_inputs(p)
+    p.add_argument("--out", required=True, metavar="DIR", help="output directory")
+    p.add_argument("--seed", type=_integer(0), default=0, metavar="S", help="random seed (default 0)")
+    _add_tracker_settings(p)
+    p.add_argument("--no-video", action="store_true", help="do not write annotated.avi")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_track)
+
+
+def _add_track_inputs(p: argparse.ArgumentParser) -> None:
+    """``belief track``'s inputs: the source, its init, detections and ground truth."""
     p.add_argument("source", nargs="?", metavar="SOURCE",
                    help="what to track: a video file; a folder of images (.jpg, .png, .bmp, .tif, ..., taken in "
                         "the order of their names); an image pattern such as img1/%%06d.jpg (from number 0 or 1 "
@@ -288,8 +318,10 @@ def register(subparsers: Any) -> None:
                         "correct the tracks; add 'detections' to --cues to fuse them as a cue as well")
     p.add_argument("--gt", metavar="GT.txt", help="MOTChallenge ground truth to score the tracks against "
                                                   "(implied by --init-from-gt)")
-    p.add_argument("--out", required=True, metavar="DIR", help="output directory")
-    p.add_argument("--seed", type=_integer(0), default=0, metavar="S", help="random seed (default 0)")
+
+
+def _add_tracker_settings(p: argparse.ArgumentParser) -> None:
+    """``belief track``'s tracker settings: the dedicated flags, then ``--set`` for any other."""
     p.add_argument("--particles", type=_integer(1), metavar="N", help="particles per target (default 100)")
     p.add_argument("--cues", metavar="LIST", help="comma-separated cues in fusion order, of colour, location, "
                                                   "foreground, edges (default colour,location,foreground)")
@@ -314,9 +346,6 @@ def register(subparsers: Any) -> None:
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="any tracker setting, e.g. --set belief.masses=normalised, --set location.literal=true, "
                         "--set adaptive_fusion.mix_norm=raw (repeatable; values in TOML syntax)")
-    p.add_argument("--no-video", action="store_true", help="do not write annotated.avi")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.set_defaults(func=_cmd_track)
 
 
 # -- belief eval -----------------------------------------------------------------------------------

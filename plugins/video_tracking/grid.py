@@ -10,11 +10,11 @@ alone), and writes the tables of :mod:`~belief_tracking.tables`.
 
 from __future__ import annotations
 
+import concurrent.futures
 import contextlib
 import json
 import os
-import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,7 +23,7 @@ import numpy as np
 
 from .errors import TrackingError
 from .executors import executor, outcomes, runs_here
-from .experiment import CELL_FORMAT, Experiment, ExperimentError
+from .experiment import CELL_FORMAT, Cell, Experiment, ExperimentError
 from .extras import require
 from .runs import run_cell
 from .tables import (
@@ -35,6 +35,7 @@ from .tables import (
     write_csv,
     write_text,
 )
+from .writers import ProgressBar
 
 __all__ = ["ExperimentResult", "run_experiment", "check_output"]
 
@@ -127,8 +128,7 @@ def run_experiment(experiment: Experiment, out_dir: str | os.PathLike[str], *, w
         Some cells failed: the message names them; the finished ones are kept, and running
         the experiment again retries the others only.
     """
-    tqdm = require("tqdm").tqdm
-
+    require("tqdm")  # a missing extra is one line, before any argument is checked
     if not isinstance(experiment, Experiment):
         raise ExperimentError(f"experiment must be an Experiment, got {type(experiment).__name__}")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, (int, np.integer))
@@ -136,55 +136,91 @@ def run_experiment(experiment: Experiment, out_dir: str | os.PathLike[str], *, w
         raise ExperimentError(f"workers must be an integer >= 1, got {workers!r}")
     out = check_output(out_dir)
     cell_dir = out / "cells"
-
     cells = experiment.cells()
-    records: dict[str, dict[str, Any]] = {}
-    todo = []
-    for cell in cells:
-        record = None if fresh else _read_cell(cell_dir / f"{cell.key}.json", cell.key)
-        if record is None:
-            todo.append(cell)
-        else:
-            records[cell.key] = record
+    records = {} if fresh else _finished_cells(cells, cell_dir)
+    todo = [cell for cell in cells if cell.key not in records]
     reused = len(records)
-    failures = []
     with contextlib.ExitStack() as stack:
         # The workers first (an unreachable scheduler fails here), then the announcement and the files.
         pool = None
         if todo and not runs_here(workers, scheduler, len(todo)):
-            try:
+            with _as_experiment_error():
                 pool = stack.enter_context(executor(workers, scheduler, len(todo)))
-            except TrackingError as exc:
-                raise exc if isinstance(exc, ExperimentError) else ExperimentError(str(exc)) from None
         if announce is not None:
             announce()
-        try:
-            cell_dir.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise ExperimentError(f"cannot create the output folder {str(cell_dir)!r}: "
-                                  f"{exc.strerror or exc}") from None
-        write_text(out / "experiment.json", json.dumps(experiment.to_dict(), indent=2, sort_keys=True) + "\n")
-        if todo:
-            bar = tqdm(total=len(todo), unit="run", desc=experiment.name, file=sys.stderr, leave=False,
-                       disable=not progress or not sys.stderr.isatty())
-            try:
-                for cell, record, error in outcomes(run_cell, todo, workers=workers, scheduler=scheduler,
-                                                    pool=pool):
-                    bar.update(1)
-                    if error is not None:
-                        failures.append((cell, error))
-                        continue
-                    text = json.dumps(record, allow_nan=False, default=_json_default)
-                    write_text(cell_dir / f"{cell.key}.json", text + "\n")
-                    records[cell.key] = json.loads(text)    # as a reused cell reads: lists, not tuples
-            except TrackingError as exc:
-                if isinstance(exc, ExperimentError):
-                    raise
-                raise ExperimentError(str(exc)) from None
-            finally:
-                bar.close()
-
+        _start_output(out, cell_dir, experiment)
+        with _as_experiment_error():
+            failures = _run_pending(todo, cell_dir, records, workers=workers, scheduler=scheduler, pool=pool,
+                                    progress=progress, desc=experiment.name)
     finished = [cell for cell in cells if cell.key in records]
+    results, rms, summary, files = _write_tables(out, finished, records)
+    if failures:
+        first, message = failures[0]
+        raise ExperimentError(f"{len(failures)} of {len(cells)} runs failed (first: {first.label}: {message}); "
+                              f"the {len(finished)} finished runs are saved in {cell_dir}, and running the "
+                              f"experiment again retries the others")
+    return ExperimentResult(results, rms, summary, {c.key: records[c.key] for c in finished},
+                            len(todo), reused, files)
+
+
+@contextlib.contextmanager
+def _as_experiment_error() -> Iterator[None]:
+    """Raise a :class:`TrackingError` of the block (a worker pool that cannot start, say) as an ExperimentError."""
+    try:
+        yield
+    except TrackingError as exc:
+        if isinstance(exc, ExperimentError):
+            raise
+        raise ExperimentError(str(exc)) from None
+
+
+def _finished_cells(cells: Sequence[Cell], cell_dir: Path) -> dict[str, dict[str, Any]]:
+    """The records of the cells already saved under ``cell_dir``, by key."""
+    records = {}
+    for cell in cells:
+        record = _read_cell(cell_dir / f"{cell.key}.json", cell.key)
+        if record is not None:
+            records[cell.key] = record
+    return records
+
+
+def _start_output(out: Path, cell_dir: Path, experiment: Experiment) -> None:
+    """Create ``OUT/cells/`` and write ``experiment.json``."""
+    try:
+        cell_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ExperimentError(f"cannot create the output folder {str(cell_dir)!r}: "
+                              f"{exc.strerror or exc}") from None
+    write_text(out / "experiment.json", json.dumps(experiment.to_dict(), indent=2, sort_keys=True) + "\n")
+
+
+def _run_pending(todo: Sequence[Cell], cell_dir: Path, records: dict[str, dict[str, Any]], *,
+                 workers: int | None, scheduler: str | None, pool: concurrent.futures.Executor | None,
+                 progress: bool, desc: str) -> list[tuple[Cell, str]]:
+    """Run the cells of ``todo``, saving each finished one at once; returns the failed cells and their errors.
+
+    ``records`` gains the record of every finished cell, as a reused cell reads it back.
+    """
+    failures: list[tuple[Cell, str]] = []
+    if not todo:
+        return failures
+    bar = ProgressBar(len(todo), show=progress, unit="run", desc=desc)
+    try:
+        for cell, record, error in outcomes(run_cell, todo, workers=workers, scheduler=scheduler, pool=pool):
+            bar.advance()
+            if error is not None:
+                failures.append((cell, error))
+                continue
+            text = json.dumps(record, allow_nan=False, default=_json_default)
+            write_text(cell_dir / f"{cell.key}.json", text + "\n")
+            records[cell.key] = json.loads(text)    # as a reused cell reads: lists, not tuples
+    finally:
+        bar.close()
+    return failures
+
+
+def _write_tables(out: Path, finished: Sequence[Cell], records: Mapping[str, dict[str, Any]]):
+    """Write ``results.csv``, ``rms.csv`` and ``summary.csv`` of the finished cells; returns their rows and files."""
     results = [records[cell.key]["row"] for cell in finished]
     rms = rms_per_frame([(cell.sequence.name, cell.method.name, records[cell.key]) for cell in finished])
     summary = summarise(results)
@@ -193,13 +229,7 @@ def run_experiment(experiment: Experiment, out_dir: str | os.PathLike[str], *, w
     write_csv(files["results.csv"], RESULT_COLUMNS, results)
     write_csv(files["rms.csv"], RMS_COLUMNS, rms)
     write_csv(files["summary.csv"], summary_columns(), summary)
-    if failures:
-        first, message = failures[0]
-        raise ExperimentError(f"{len(failures)} of {len(cells)} runs failed (first: {first.label}: {message}); "
-                              f"the {len(finished)} finished runs are saved in {cell_dir}, and running the "
-                              f"experiment again retries the others")
-    return ExperimentResult(results, rms, summary, {c.key: records[c.key] for c in finished},
-                            len(todo), reused, files)
+    return results, rms, summary, files
 
 
 def _read_cell(path: Path, key: str) -> dict[str, Any] | None:

@@ -11,6 +11,9 @@ end, ``summary.json`` last, so a run that fails leaves nothing that looks comple
 succeeds also removes the files of :data:`RUN_OUTPUTS` that it did not write (an
 ``annotated.avi`` of an earlier run, when this one has ``--no-video``), so that the directory
 holds the outputs of its latest run only.
+
+The run's writers (:mod:`~belief_tracking.writers`) keep what each frame gives and write these
+files with the functions here once the run is known to be good.
 """
 
 from __future__ import annotations

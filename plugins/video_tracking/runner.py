@@ -1,14 +1,17 @@
 """A whole tracking run: frames in, files out (``belief track``).
 
-:func:`run` opens the source, makes a :class:`~belief_tracking.tracker.Tracker`,
-consumes its frame results while showing progress and timing the tracker's own work, and
-writes the run's files (:mod:`~belief_tracking.outputs`), scored against a ground
-truth when one is given.  The tracker itself never touches a file.
+:func:`run` checks its inputs, opens the source and stages the outputs
+(:class:`~belief_tracking.outputs.StagedOutputs`), makes a
+:class:`~belief_tracking.tracker.Tracker` (:func:`start_tracker`), and hands its frame
+results to the run's writers (:mod:`~belief_tracking.writers`: tracks, diagnostics, plot,
+annotated video, progress bar, timing, scores and summary), which write the files once the
+frames are known to be complete; then the staged files are committed.  The tracker itself
+never touches a file.
 """
 
 from __future__ import annotations
 
-import sys
+import functools
 import time
 from dataclasses import asdict, dataclass, field
 from os import PathLike
@@ -21,11 +24,24 @@ from .detections import Detections, check_detections
 from .errors import DetectionFileError, InitError, TrackingError
 from .extras import require
 from .initiation import InitPlan
-from .motfiles import read_mot, write_tracks
-from .sources import open_source
+from .motfiles import read_mot
+from .sources import FrameSource, open_source
 from .tracker import Tracker
+from .writers import (
+    AnnotatedVideo,
+    DiagnosticsPlot,
+    DiagnosticsWriter,
+    ExtraFile,
+    FrameWriter,
+    ProgressBar,
+    Scoring,
+    SummaryWriter,
+    Timing,
+    TracksWriter,
+    feed,
+)
 
-__all__ = ["Summary", "run"]
+__all__ = ["Summary", "run", "start_tracker"]
 
 
 @dataclass(frozen=True)
@@ -130,12 +146,56 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
         detections that do not fit the video (:class:`DetectionFileError`), …
         On any error the staged files are deleted: nothing that looks complete is left.
     """
-    tqdm = require("tqdm").tqdm
+    for package in ("tqdm", "cv2"):
+        require(package)  # a missing extra is one line, before any input is read or any file written
+    _check_arguments(seed, init, config, detections)
+    started = time.perf_counter()
+    frames = open_source(source)
+    try:
+        gt_rows = _ground_truth(gt)
+        _check_fit(frames, init, detections)
+        staged = outputs.StagedOutputs(out_dir, owned=outputs.RUN_OUTPUTS + tuple(extra_outputs or ()))
+    except BaseException:
+        frames.close()
+        raise
+    try:
+        tracker = start_tracker(config, init, seed, frames)
+        timing = Timing(started)
+        tracks = TracksWriter(staged.path("tracks.txt"))
+        diagnostics = DiagnosticsWriter(staged.path("diagnostics.csv"), tracker.diagnostic_columns)
+        scoring = Scoring(gt_rows, tracks) if gt_rows is not None else None
+        writers = _writers(staged, frames, config, timing, tracks, diagnostics, scoring,
+                           settings=_settings_record(seed, init, detections, config), write_video=write_video,
+                           write_plot=write_plot, progress=progress, extra_outputs=extra_outputs or {})
+        feed(functools.partial(tracker.track, detections=detections), frames, writers)
+        _check_length(frames, timing.frames, detections)
+        for writer in writers:
+            writer.finish()
+        files = staged.commit()
+    except BaseException:
+        staged.abort()
+        raise
+    finally:
+        frames.close()
+    return Summary(timing.frames, timing.tracking_fps, timing.overall_fps, tracks.array(),
+                   scoring.scores if scoring is not None else None, files, diagnostics.records,
+                   expected_frames=frames.count)
 
-    from belief import __version__
-    from .evaluation import evaluate
-    from .video import AnnotatedVideoWriter
 
+def start_tracker(config: TrackerConfig, init: InitPlan | None, seed: int, source: FrameSource) -> Tracker:
+    """A tracker seeded with ``seed``, its background model warmed up on ``source`` when ``config.warm_up`` asks.
+
+    The frames of the warm-up are spread over the whole source
+    (:meth:`~belief_tracking.sources.FrameSource.spread`), read apart from those of the run.
+    """
+    tracker = Tracker(config, init, np.random.default_rng(int(seed)))
+    if config.warm_up > 0 and tracker.background is not None:
+        tracker.warm_up(source.spread(config.warm_up))
+    return tracker
+
+
+def _check_arguments(seed, init, config, detections) -> None:
+    """Refuse arguments of the wrong type before any input is opened."""
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise TrackingError(f"the seed must be a non-negative integer, got {seed!r}")
     if init is not None and not isinstance(init, InitPlan):
@@ -146,99 +206,59 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
         raise InitError("nothing to track: give an init plan or turn on the automatic initiation")
     if detections is not None and not isinstance(detections, Detections):
         raise TrackingError(f"detections must be Detections or None, got {type(detections).__name__}")
-    started = time.perf_counter()
-    frames = open_source(source)
-    try:
-        gt_rows = None
-        if gt is not None:
-            gt_rows = read_mot(gt) if isinstance(gt, (str, PathLike)) else np.asarray(gt, dtype=np.float64)
-        if init is not None:
-            init.check_image(frames.width, frames.height)
-        if detections is not None:
-            check_detections(detections, frame_count=frames.count, image_size=(frames.width, frames.height))
-        owned = outputs.RUN_OUTPUTS + tuple(extra_outputs or ())
-        staged = outputs.StagedOutputs(out_dir, owned=owned)
-    except BaseException:
-        frames.close()
-        raise
-    try:
-        tracker = Tracker(config, init, np.random.default_rng(int(seed)))
-        if config.warm_up > 0 and tracker.background is not None:
-            tracker.warm_up(frames.spread(config.warm_up))
-        writer = AnnotatedVideoWriter(staged.path("annotated.avi"), frames.fps) if write_video else None
-        rows: list[list[float]] = []
-        records: list[dict[str, float]] = []
-        tracking_seconds = 0.0
-        count = 0
-        bar = tqdm(total=frames.count, unit="frame", desc="tracking", file=sys.stderr, leave=False,
-                   disable=not progress or not sys.stderr.isatty())
-        shown: list[np.ndarray] = []
 
-        def remembered():
-            # The annotated video draws each result on the frame it came from.
-            for image in frames:
-                shown[:] = [image]
-                yield image
 
-        try:
-            for result in tracker.track(remembered(), detections=detections):
-                tracking_seconds += result.seconds
-                frame_rows = result.mot_rows()
-                for row, estimate in zip(frame_rows, result.estimates):
-                    if not np.isfinite(row).all():
-                        raise TrackingError(f"frame {result.frame}: target {estimate.id} has a non-finite estimate")
-                rows += frame_rows
-                records += result.diagnostics.rows(result.frame)
-                if writer is not None:
-                    writer.write(shown[0], result.frame, [(e.id, e.box) for e in result.estimates])
-                count += 1
-                bar.update(1)
-        finally:
-            bar.close()
-            if writer is not None:
-                writer.close()
-        if count == 0:
-            raise TrackingError(f"{frames.name}: no frame to track")
-        missing = frames.missing(count)
-        if not missing and detections is not None and detections.frames and detections.frames[-1] > count:
-            # A container may announce more frames than it holds, so the check before the run can miss this.
-            raise DetectionFileError(f"{detections.source}: frame {detections.frames[-1]} is after the end of "
-                                     f"the video ({count} frames)")
-        tracks = np.array(rows, dtype=np.float64).reshape(-1, 10)
-        write_tracks(staged.path("tracks.txt"), rows)
-        outputs.write_diagnostics(staged.path("diagnostics.csv"), records, ("frame", "id") + tracker.diagnostic_columns)
-        if write_plot:
-            outputs.plot_diagnostics(staged.path("diagnostics.png"), records,
-                                     title=f"{frames.name}: {config.describe()}",
-                                     threshold=config.adaptive_fusion.threshold)
-        for name, write in (extra_outputs or {}).items():
-            write(staged.path(name))
-        scores = evaluate(gt_rows, tracks) if gt_rows is not None else None
-        overall = time.perf_counter() - started
-        tracking_fps = count / tracking_seconds if tracking_seconds > 0 else float("inf")
-        overall_fps = count / overall if overall > 0 else float("inf")
-        summary = {
-            "source": frames.name,
-            "frames": count,
-            "expected_frames": frames.count,
-            "complete": not missing,
-            "targets": len({int(row[1]) for row in rows}),
-            "track_rows": len(rows),
-            "fps": {"tracking": tracking_fps, "overall": overall_fps, "decoding_seconds": frames.decode_seconds,
-                    "tracking_seconds": tracking_seconds, "overall_seconds": overall},
-            "seed": int(seed),
-            "init": init.source if init is not None else "automatic initiation",
+def _ground_truth(gt: np.ndarray | str | PathLike[str] | None) -> np.ndarray | None:
+    """The rows of a ground truth given as a MOTChallenge file or as rows (None when there is none)."""
+    if gt is None:
+        return None
+    return read_mot(gt) if isinstance(gt, (str, PathLike)) else np.asarray(gt, dtype=np.float64)
+
+
+def _check_fit(frames: FrameSource, init: InitPlan | None, detections: Detections | None) -> None:
+    """Refuse init boxes outside the image, and detections after the source's frames or outside its image."""
+    if init is not None:
+        init.check_image(frames.width, frames.height)
+    if detections is not None:
+        check_detections(detections, frame_count=frames.count, image_size=(frames.width, frames.height))
+
+
+def _writers(staged: outputs.StagedOutputs, frames: FrameSource, config: TrackerConfig, timing: Timing,
+             tracks: TracksWriter, diagnostics: DiagnosticsWriter, scoring: Scoring | None, *,
+             settings: dict, write_video: bool, write_plot: bool, progress: bool,
+             extra_outputs: dict) -> list[FrameWriter]:
+    """The writers of a run, in the order they are handed each frame and then finished, ``summary.json`` last."""
+    writers: list[FrameWriter] = [timing]
+    if write_video:
+        writers.append(AnnotatedVideo(staged.path("annotated.avi"), frames.fps))
+    writers += [tracks, diagnostics]
+    if write_plot:
+        writers.append(DiagnosticsPlot(staged.path("diagnostics.png"), diagnostics,
+                                       title=f"{frames.name}: {config.describe()}",
+                                       threshold=config.adaptive_fusion.threshold))
+    writers.append(ProgressBar(frames.count, show=progress))
+    writers += [ExtraFile(staged.path(name), write) for name, write in extra_outputs.items()]
+    if scoring is not None:
+        writers.append(scoring)
+    writers.append(SummaryWriter(staged.path("summary.json"), frames, timing, tracks, scoring, settings))
+    return writers
+
+
+def _check_length(frames: FrameSource, count: int, detections: Detections | None) -> None:
+    """Refuse a run of no frame, and detections after the last frame the source turned out to hold."""
+    if count == 0:
+        raise TrackingError(f"{frames.name}: no frame to track")
+    if not frames.missing(count) and detections is not None and detections.frames and detections.frames[-1] > count:
+        # A container may announce more frames than it holds, so the check before the run can miss this.
+        raise DetectionFileError(f"{detections.source}: frame {detections.frames[-1]} is after the end of "
+                                 f"the video ({count} frames)")
+
+
+def _settings_record(seed: int, init: InitPlan | None, detections: Detections | None,
+                     config: TrackerConfig) -> dict:
+    """What ``summary.json`` records of the run's request: seed, init, detections, parameters, version."""
+    from belief import __version__
+
+    return {"seed": int(seed), "init": init.source if init is not None else "automatic initiation",
             "detections": detections.source if detections is not None else None,
-            "parameters": asdict(config),
-            "version": __version__,
-            "scores": scores.to_dict() if scores is not None else None,
-        }
-        outputs.write_summary(staged.path("summary.json"), summary)
-        files = staged.commit()
-    except BaseException:
-        staged.abort()
-        raise
-    finally:
-        frames.close()
-    return Summary(count, tracking_fps, overall_fps, tracks, scores, files, records,
-                   expected_frames=frames.count)
+            "parameters": asdict(config), "version": __version__}

@@ -1,6 +1,7 @@
 """One run of an experiment's grid: track a cell's sequence with its settings and seed, and score it.
 
-:func:`run_cell` consumes the tracker's frame results directly (no file is written) and
+:func:`run_cell` hands the tracker's frame results to the writers that only keep them
+(:mod:`~belief_tracking.writers`: timing, track rows, diagnostics; no file is written) and
 returns a JSON-ready record: the row of ``results.csv``, the centre errors of every target
 for ``rms.csv`` (W (36)), the per-frame curves of W (33)–(35) and C (15), and the tracks.
 It runs on a worker (a local process or a Dask worker): a synthetic scene is rendered
@@ -12,18 +13,20 @@ path.  A sequence with a detection file gives each frame's boxes to the tracker
 
 from __future__ import annotations
 
+import functools
 import math
-import time
 from typing import Any
 
 import numpy as np
 
+from .config import TrackerConfig
 from .errors import VideoError
-from .evaluation import evaluate, matched_pairs
+from .evaluation import Scores, evaluate, matched_pairs
 from .experiment import CELL_FORMAT, Cell
 from .initiation import init_from_gt
+from .runner import start_tracker
 from .sources import open_source
-from .tracker import Tracker
+from .writers import DiagnosticRows, Timing, TrackRows, feed
 
 __all__ = ["run_cell", "CURVE_COLUMNS"]
 
@@ -55,31 +58,33 @@ def run_cell(cell: Cell) -> dict[str, Any]:
         names it), a video decodes fewer frames than it announces (truncated or corrupt), or
         a setting is bad.
     """
-    started = time.perf_counter()
+    timing = Timing()
     config = cell.config()
     frames, gt = cell.sequence.load()
     detections = cell.sequence.load_detections()
     plan = init_from_gt(gt, source=f"ground truth of {cell.sequence.name}") if cell.sequence.init == "gt" else None
-    rows: list[list[float]] = []
-    diagnostics: list[dict[str, float]] = []
-    tracking_seconds = 0.0
+    tracks, diagnostics = TrackRows(), DiagnosticRows()
     with open_source(frames) as source:
-        tracker = Tracker(config, plan, np.random.default_rng(cell.seed))
-        if config.warm_up > 0 and tracker.background is not None:
-            tracker.warm_up(source.spread(config.warm_up))
-        count = 0
-        for result in tracker.track(source, detections=detections):
-            tracking_seconds += result.seconds
-            rows += result.mot_rows()
-            diagnostics += result.diagnostics.rows(result.frame)
-            count += 1
-        if source.missing(count):
-            raise VideoError(f"{source.name}: decoded {count} of the {source.count} frames the file announces "
-                             f"(truncated or corrupt after frame {count})")
-    seconds = time.perf_counter() - started
-    tracks = np.array(rows, dtype=np.float64).reshape(-1, 10)
-    scores = evaluate(gt, tracks)
-    errors = _centre_errors(gt, tracks, by_id=cell.sequence.init == "gt")
+        tracker = start_tracker(config, plan, cell.seed, source)
+        feed(functools.partial(tracker.track, detections=detections), source, (timing, tracks, diagnostics))
+        if source.missing(timing.frames):
+            raise VideoError(f"{source.name}: decoded {timing.frames} of the {source.count} frames the file "
+                             f"announces (truncated or corrupt after frame {timing.frames})")
+    timing.stop()
+    track_rows = tracks.array()
+    errors = _centre_errors(gt, track_rows, by_id=cell.sequence.init == "gt")
+    row = _results_row(cell, config, timing, evaluate(gt, track_rows), errors, diagnostics.records)
+    curves = [[int(r["frame"]), int(r["id"])] + [_finite(r.get(c)) for c in CURVE_COLUMNS]
+              for r in diagnostics.records]
+    return {"format": CELL_FORMAT, "key": cell.key, "row": row,
+            "errors": {str(k): v for k, v in errors.items()}, "curves": curves,
+            "tracks": [[float(v) for v in r] for r in track_rows]}
+
+
+def _results_row(cell: Cell, config: TrackerConfig, timing: Timing, scores: Scores,
+                 errors: dict[int, list[list[float]]], diagnostics: list[dict[str, float]]) -> dict[str, Any]:
+    """The cell's row of ``results.csv``; NaN is saved as None (a ratio without a denominator, e.g. MOTP without
+    any match)."""
     squared = [e * e for pairs in errors.values() for _, e in pairs]
 
     def mean_of(column: str) -> float:
@@ -94,7 +99,7 @@ def run_cell(cell: Cell) -> dict[str, Any]:
         "cues": "+".join(config.cues),
         "seed": cell.seed,
         "particles": config.particles,
-        "frames": count,
+        "frames": timing.frames,
         "mota": scores.mota, "motp": scores.motp, "idf1": scores.idf1,
         "precision": scores.precision, "recall": scores.recall,
         "id_switches": scores.id_switches, "false_positives": scores.false_positives,
@@ -104,16 +109,11 @@ def run_cell(cell: Cell) -> dict[str, Any]:
         "rms_error": math.sqrt(math.fsum(squared) / len(squared)) if squared else math.nan,
         "mean_particles": mean_of("particles"),
         "occluded_share": mean_of("occluded"),
-        "seconds": seconds,
-        "tracking_fps": count / tracking_seconds if tracking_seconds > 0 else math.inf,
-        "overall_fps": count / seconds if seconds > 0 else math.inf,
+        "seconds": timing.overall_seconds,
+        "tracking_fps": timing.tracking_fps,
+        "overall_fps": timing.overall_fps,
     }
-    # NaN (a ratio without a denominator, e.g. MOTP without any match) is saved as null
-    row = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}
-    curves = [[int(r["frame"]), int(r["id"])] + [_finite(r.get(c)) for c in CURVE_COLUMNS] for r in diagnostics]
-    return {"format": CELL_FORMAT, "key": cell.key, "row": row,
-            "errors": {str(k): v for k, v in errors.items()}, "curves": curves,
-            "tracks": [[float(v) for v in r] for r in tracks]}
+    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}
 
 
 def _finite(value: Any) -> float | None:
