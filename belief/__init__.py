@@ -7,7 +7,9 @@ The core objects:
 * :func:`hyper_power_set`: D^Θ enumerated (n ≤ 6 on the free model);
 * :class:`MassFunction`: one mass function; :class:`MassBatch`: N of them as an (N, K) array;
 * :func:`combine`: the rules of :data:`RULES`, with closed forms for Bayesian sources
-  (:class:`ClosedFormBatch`, :func:`exclusive_split`) and :func:`inconsistency`, R of W (10).
+  (:class:`ClosedFormBatch`, :func:`exclusive_split`) and :func:`inconsistency`, R of W (10);
+  :func:`get_rule` looks a rule up, :data:`R_MODES` and :data:`EMPTY_MODES` are the options of the
+  R-weighted rule.
 
 >>> from belief import Frame, MassFunction
 >>> m = MassFunction({"a": 0.6, "a|b": 0.4}, frame=["a", "b"])
@@ -35,7 +37,8 @@ from belief.frame import Element, Frame
 from belief.lattice import HyperPowerSet, hyper_power_set
 from belief.mass import MassFunction
 from belief.model import Model
-from belief.rules import ENGINES, RULES, UnknownRuleError, combine, inconsistency, sequential
+from belief.rules import (EMPTY_MODES, ENGINES, R_MODES, RULES, UnknownRuleError, combine, get_rule, inconsistency,
+                          sequential)
 from belief import extra_rules, representations  # importing extra_rules registers its rules in RULES
 
 __version__ = "0.1.0"
@@ -44,6 +47,7 @@ __all__ = [
     "BeliefError",
     "ClosedFormBatch",
     "CombinationTooLargeError",
+    "EMPTY_MODES",
     "ENGINES",
     "Element",
     "FormatError",
@@ -63,8 +67,10 @@ __all__ = [
     "UnknownHypothesisError",
     "UnknownRuleError",
     "RULES",
+    "R_MODES",
     "combine",
     "exclusive_split",
+    "get_rule",
     "inconsistency",
     "sequential",
     "hyper_power_set",

@@ -14,7 +14,7 @@ import sys
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
-from typing import TYPE_CHECKING, Union
+from typing import ClassVar, Union
 
 import numpy as np
 
@@ -22,9 +22,6 @@ from belief.errors import FrameError, InvalidMassError, TotalConflictError, Unde
 from belief.frame import Element, Frame
 from belief.model import Model, _show
 from belief.plan import weighted_sum
-
-if TYPE_CHECKING:
-    from belief.mass import MassFunction
 
 __all__ = ["MassBatch", "measure_plan", "MeasurePlan", "SUM_TOLERANCE", "resolve_model", "check_select"]
 
@@ -322,6 +319,10 @@ class MassBatch:
 
     __slots__ = ("model", "focal", "values", "_canonical", "_key", "__weakref__")
 
+    #: The class of one row (:meth:`__getitem__`), :class:`~belief.mass.MassFunction`: :mod:`belief.mass`, which
+    #: builds the mass functions on this engine, sets it when it defines them (the engine never imports them).
+    row_type: ClassVar[type]
+
     def __init__(self, focal: Iterable[Query], values, frame=None, model=None, *,
                  subnormal: bool = False, validate: bool = True) -> None:
         model = resolve_model(frame, model)
@@ -430,7 +431,7 @@ class MassBatch:
         return self._key
 
     @classmethod
-    def from_mass_functions(cls, masses: Sequence["MassFunction"]) -> "MassBatch":
+    def from_mass_functions(cls, masses: Iterable) -> "MassBatch":
         """Stack mass functions of one model; the focal list is the union of theirs.
 
         >>> from belief import MassFunction
@@ -467,21 +468,20 @@ class MassBatch:
     def __len__(self) -> int:
         return self.values.shape[0]
 
-    def __getitem__(self, index: int) -> "MassFunction":
-        from belief.mass import MassFunction
-
+    def __getitem__(self, index: int):
+        """Row ``index`` as a :class:`~belief.mass.MassFunction` (without the focal elements it gives no mass)."""
         row = self.values[index]
         if row.ndim != 1:
             raise TypeError("index a batch with one integer; use .values for slices")
         # canonical order of focal elements, as MassFunction equality and hashing expect
         positive = row > 0
         if self._canonical and positive.all():
-            return MassFunction._trusted(self.model, self.focal, row)
+            return self.row_type._trusted(self.model, self.focal, row)
         kept = np.flatnonzero(positive).tolist()
         if not self._canonical:
             kept.sort(key=lambda i: self.focal[i].sort_key)
         focal = self.focal
-        return MassFunction._trusted(self.model, tuple([focal[i] for i in kept]), row[kept])
+        return self.row_type._trusted(self.model, tuple([focal[i] for i in kept]), row[kept])
 
     def __iter__(self):
         for i in range(len(self)):
@@ -711,14 +711,14 @@ def check_refines(old: Model, new: Model) -> None:
         )
 
 
-def check_cardinality_range(mass: Union[MassBatch, "MassFunction"], what: str,
-                            epsilon: float | None = None) -> None:
+def check_cardinality_range(mass, what: str, epsilon: float | None = None) -> None:
     """Refuse a transformation whose DSm cardinalities, or ε times them, do not fit a float.
 
-    BetP and DSmP divide by C_M(X) (DSmP by m(X's singletons) + ε C_M(X)) in floating point;
-    past the largest float (about 1.8e308) the quotient would come out as 0 or NaN instead
-    of the right value.  C_M(X) ≤ 2^n - 1, so frames of fewer than 1 023 hypotheses with
-    ε ≤ 1 pass without computing anything.
+    ``mass`` is a :class:`MassBatch` or a :class:`~belief.mass.MassFunction`.  BetP and DSmP
+    divide by C_M(X) (DSmP by m(X's singletons) + ε C_M(X)) in floating point; past the
+    largest float (about 1.8e308) the quotient would come out as 0 or NaN instead of the
+    right value.  C_M(X) ≤ 2^n - 1, so frames of fewer than 1 023 hypotheses with ε ≤ 1
+    pass without computing anything.
 
     Raises
     ------

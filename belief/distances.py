@@ -27,10 +27,11 @@ from typing import Union
 import numpy as np
 
 from belief.batch import MassBatch
-from belief.errors import FrameError, InvalidMassError, ModelError, UnknownMeasureError
+from belief.errors import InvalidMassError, UnknownMeasureError
 from belief.frame import Element
 from belief.mass import MassFunction
 from belief.model import Model
+from belief.rules_common import check_same_model
 
 __all__ = ["jousselme_distance", "euclidean_distance", "tessem_distance", "distance", "conflict",
            "jousselme_matrix", "DISTANCES"]
@@ -48,19 +49,6 @@ def _as_batch(source: Source, what: str = "source") -> tuple[MassBatch, bool]:
     raise TypeError(f"{what} is a {type(source).__name__}, not a MassFunction or MassBatch")
 
 
-def _check_same_model(batches: Sequence[MassBatch]) -> Model:
-    """The shared model of the batches; FrameError or ModelError if they differ."""
-    model = batches[0].model
-    for k, b in enumerate(batches[1:], start=2):
-        if b.model != model:
-            if b.frame != model.frame:
-                raise FrameError(f"source {k} has the frame {list(b.frame.hypotheses)}, "
-                                 f"source 1 has {list(model.frame.hypotheses)}")
-            raise ModelError(f"source {k} was elicited under the {b.model.kind} model and source 1 under the "
-                             f"{model.kind} model; read them under one model first (MassFunction.under)")
-    return model
-
-
 def _rows(batches: Sequence[MassBatch]) -> int:
     counts = {len(b) for b in batches} - {1}
     if len(counts) > 1:
@@ -71,7 +59,7 @@ def _rows(batches: Sequence[MassBatch]) -> int:
 def _pair(m1: Source, m2: Source) -> tuple[MassBatch, MassBatch, Model, int, bool]:
     b1, single1 = _as_batch(m1, "the first source")
     b2, single2 = _as_batch(m2, "the second source")
-    model = _check_same_model([b1, b2])
+    model = check_same_model([b1, b2])
     return b1, b2, model, _rows([b1, b2]), single1 and single2
 
 

@@ -28,7 +28,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from belief import representations as rep
+import belief.representations as rep
 from belief.batch import MassBatch
 from belief.errors import CombinationTooLargeError, InvalidMassError, ModelError
 from belief.frame import Element

@@ -597,6 +597,8 @@ class MassFunction(_MassSlots):
         return cls.from_dict(load_json(text))
 
 
+MassBatch.row_type = MassFunction       # a row of a batch is a mass function (the engine does not import this module)
+
 _NUMBERS = (int, float, np.integer, np.floating)
 #: Distinct unions of at most RANK_TABLE_WIDTH hypotheses are at most 2**16 positive masses, whose
 #: plain float sum is off their exact sum by less than 1e-11 of it: within this of one, the exact

@@ -16,7 +16,7 @@ import pytest
 from hypothesis import event, given, settings, target
 from hypothesis import strategies as st
 
-import belief.bayesian as bayesian_module
+import belief.bayesian_fold as fold_module
 import belief.rules as rules_module
 from belief import (
     ENGINES,
@@ -369,7 +369,7 @@ def test_pair_shares_are_exact(inputs):
     # pairs whose weights sum below the floor, or to 0 (SPEC A.4's fallback), included.
     s, p, w = inputs
     with np.errstate(divide="raise", over="raise", invalid="raise"):
-        got = bayesian_module._pair_shares(s, p, w)
+        got = fold_module._pair_shares(s, p, w)
     want = _exact_pair_shares(s, p, w)
     # Relative to the value: products below 1e-300 lose digits to subnormal rounding on any path.
     np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-300)
@@ -621,11 +621,11 @@ def test_other_queries_read_the_materialised_batch(counted):
 def test_one_fold_per_fused_batch(monkeypatch):
     # A tracker reads Bel, m(θ_J), Pls and m(∅) of one fused batch: the rule is folded once, in
     # one pass over the sources' rows (30 rows: one block).
-    import belief.bayesian as bayesian
+    from belief.bayesian_blocks import Blocks
 
     made = []
-    real = bayesian._Blocks.block
-    monkeypatch.setattr(bayesian._Blocks, "block", lambda self, rows: made.append(1) or real(self, rows))
+    real = Blocks.block
+    monkeypatch.setattr(Blocks, "block", lambda self, rows: made.append(1) or real(self, rows))
     model = Model.for_targets(4)
     rng = np.random.default_rng(2)
     cues = [MassBatch.bayesian(dense(rng, 30, 5), model=model) for _ in range(3)]

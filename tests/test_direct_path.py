@@ -4,7 +4,7 @@ A combination of focal elements met for the first time is evaluated directly, on
 codes of the focal elements, with no plan compiled (:mod:`belief.rules`, :mod:`belief.plan`);
 the plan is compiled when the same focal elements come back.  Mass functions whose focal
 elements are unions of exclusive hypotheses take the leanest form of the direct path
-(``rules._single``).  The choice must not show:
+(``rules_single.combine_single``).  The choice must not show:
 
 * batches and the general direct path add the same products in the same order as the plan:
   their results are equal to the last bit;
@@ -32,6 +32,9 @@ from hypothesis import strategies as st
 
 import belief.plan as plan_module
 import belief.rules as rules
+import belief.rules_pcr as pcr_module
+import belief.rules_single as single
+import belief.rules_tuples as tuples
 from belief import (
     BeliefError,
     CombinationTooLargeError,
@@ -66,20 +69,21 @@ def path(name: str):
     """
     with pytest.MonkeyPatch.context() as mp:
         if name == "plan":
-            mp.setattr(rules, "_single", lambda *args: None)
-            mp.setattr(rules, "_direct", lambda *args: None)
+            mp.setattr(rules, "combine_single", lambda *args: None)
+            mp.setattr(tuples, "direct_path", lambda *args: None)
+            mp.setattr(pcr_module, "direct_path", lambda *args: None)
         elif name in ("loop", "arrays", "single-loop", "single-arrays"):
-            mp.setattr(rules, "plan_lookup", lambda *args: None)
-            mp.setattr(rules, "sighted", lambda *args: False)
-            mp.setattr(rules, "LOOP_TUPLES", 10 ** 9 if name.endswith("loop") else 0)
-            mp.setattr(rules, "WIDE_LOOP_TUPLES", 10 ** 9 if name.endswith("loop") else 0)
+            mp.setattr(tuples, "plan_lookup", lambda *args: None)
+            mp.setattr(tuples, "sighted", lambda *args: False)
+            mp.setattr(tuples, "LOOP_TUPLES", 10 ** 9 if name.endswith("loop") else 0)
+            mp.setattr(tuples, "WIDE_LOOP_TUPLES", 10 ** 9 if name.endswith("loop") else 0)
             if name.startswith("single"):
                 big = name == "single-loop"
-                mp.setattr(rules, "SINGLE_LOOP_TUPLES", 10 ** 9 if big else 0)
-                mp.setattr(rules, "PCR_LOOP_TUPLES", 10 ** 9 if big else 0)
-                mp.setattr(rules, "_single_seen", lambda key, table: None)      # never a cached table
+                mp.setattr(single, "SINGLE_LOOP_TUPLES", 10 ** 9 if big else 0)
+                mp.setattr(single, "PCR_LOOP_TUPLES", 10 ** 9 if big else 0)
+                mp.setattr(single, "_single_seen", lambda key, table: None)      # never a cached table
             else:
-                mp.setattr(rules, "_single", lambda *args: None)
+                mp.setattr(rules, "combine_single", lambda *args: None)
         else:
             assert name == "auto", name
         clear_caches()
@@ -90,8 +94,8 @@ def path(name: str):
 def clear_caches() -> None:
     plan_module._PLANS.clear()
     plan_module._SIGHTINGS.clear()
-    rules._SINGLE_TABLES.clear()
-    rules._SINGLE_SIGHTINGS.clear()
+    single._SINGLE_TABLES.clear()
+    single._SINGLE_SIGHTINGS.clear()
 
 
 def outcome(sources, rule: str, **kwargs):
@@ -255,11 +259,11 @@ def test_free_and_tracking_models_leave_single_mass_functions_to_the_general_pat
     m1 = MassFunction({"a|b": 0.6, "c": 0.4}, model=free)
     m2 = MassFunction({"a": 0.5, "b|c": 0.5}, model=free)
     info = rules.get_rule("dsmc")
-    assert rules._single(info, (m1, m2), None) is None          # a and b overlap: no hypothesis masks
+    assert single.combine_single(info, (m1, m2), None) is None          # a and b overlap: no hypothesis masks
     tracking = Model.for_targets(2)
     t1 = MassFunction({"t1": 0.6, "t2|FA": 0.4}, model=tracking)
     t2 = MassFunction({"t2": 0.5, "t1|t2": 0.5}, model=tracking)
-    assert rules._single(info, (t1, t2), None) is None
+    assert single.combine_single(info, (t1, t2), None) is None
     for sources in ([m1, m2], [t1, t2]):
         for rule in RULES_UNDER_TEST:
             got = across(("plan", "loop", "arrays", "auto"), sources, rule)
@@ -284,8 +288,8 @@ def shafer_sources(k1: int, k2: int, n: int = 6):
 @pytest.mark.parametrize("rule", SINGLE_RULES)
 def test_the_loop_and_numpy_agree_on_either_side_of_the_threshold(rule, monkeypatch):
     limit = 12
-    monkeypatch.setattr(rules, "SINGLE_LOOP_TUPLES", limit)
-    monkeypatch.setattr(rules, "PCR_LOOP_TUPLES", limit)
+    monkeypatch.setattr(single, "SINGLE_LOOP_TUPLES", limit)
+    monkeypatch.setattr(single, "PCR_LOOP_TUPLES", limit)
     for k1, k2 in ((3, 4), (2, 6), (13, 1), (3, 5), (4, 4)):      # 12 tuples and fewer, then more
         sources = shafer_sources(k1, k2)
         with path("plan"):
@@ -308,12 +312,12 @@ def test_each_forced_path_is_the_one_taken():
         sources = frees if name in ("loop", "arrays") else mfs
         calls = []
         with path(name):
-            module = plan_module if function == "tuple_plan" else rules
+            module = plan_module if function == "tuple_plan" else single if name.startswith("single") else tuples
             original = getattr(module, function)
             with pytest.MonkeyPatch.context() as mp:
                 mp.setattr(module, function, lambda *args, **kw: calls.append(1) or original(*args, **kw))
                 if function == "tuple_plan":
-                    mp.setattr(rules, "tuple_plan", getattr(module, function))
+                    mp.setattr(tuples, "tuple_plan", getattr(module, function))
                 combine(*sources, rule="conjunctive")
         assert calls, name
 
@@ -338,8 +342,8 @@ def test_single_tables_are_kept_only_for_focal_elements_that_come_back():
         for _ in range(3):
             results.append(outcome([m1, m2], "conjunctive"))
             if len(results) == 1:
-                assert not rules._SINGLE_TABLES
-        assert len(rules._SINGLE_TABLES) == 1
+                assert not single._SINGLE_TABLES
+        assert len(single._SINGLE_TABLES) == 1
     assert results[0] == results[1] == results[2]
 
 

@@ -10,7 +10,7 @@ import belief.errors
 PAGE = Path(__file__).resolve().parent.parent / "docs" / "limits.md"
 ROW = re.compile(r"^\| `(belief(?:\.\w+)+)\.([A-Z_]+)` \| (\d+) \|", re.MULTILINE)
 #: Module constants named MAX_* that are not limits on a user's job.
-NOT_LIMITS = {("belief.testing", "MAX_WEIGHT")}
+NOT_LIMITS = {("belief.strategies", "MAX_WEIGHT")}
 
 
 def documented() -> dict:
