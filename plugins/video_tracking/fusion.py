@@ -22,9 +22,7 @@ from functools import cached_property
 
 import numpy as np
 
-from belief import MassBatch, Model, combine, inconsistency
-from belief.errors import BeliefError
-from belief.rules import EMPTY_MODES, R_MODES, get_rule
+from belief import EMPTY_MODES, R_MODES, BeliefError, MassBatch, Model, combine, get_rule, inconsistency
 from . import checks
 from .errors import TrackingError
 
