@@ -1,4 +1,4 @@
-"""Scoring tracks against ground truth: CLEAR MOT (MOTA, MOTP), IDF1 and centre errors.
+"""Scoring tracks against ground truth: CLEAR MOT (MOTA, MOTP), IDF1, centre errors and identity swaps.
 
 Tracks and ground truth are MOTChallenge rows (read by
 :func:`~belief_tracking.motfiles.read_mot`): one box per row,
@@ -18,15 +18,19 @@ in pixels.  :func:`evaluate` follows the usual MOTChallenge protocol:
 The IoU distances are computed here, not with ``motmetrics.distances.iou_matrix``: the
 released motmetrics 1.4.0 calls ``np.asfarray``, which NumPy 2 removed.
 
-``motmetrics`` (and with it pandas) is imported only when :func:`evaluate` runs, so that
+:func:`identity_swaps` counts the frames in which a ground-truth target, paired with a track
+by the same matching, is followed by a track that is not the target's own.
+
+``motmetrics`` (and with it pandas) is imported only when a score is computed, so that
 the ``belief`` command line starts without it.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -40,6 +44,8 @@ __all__ = [
     "matched_pairs",
     "iou_distance",
     "evaluate",
+    "IdentitySwaps",
+    "identity_swaps",
 ]
 
 _FRAME, _ID, _X, _Y, _W, _H, _FLAG = range(7)
@@ -441,3 +447,143 @@ def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
         mean_centre_error=float(np.mean(centre_errors)) if len(centre_errors) else nan,
         median_centre_error=float(np.median(centre_errors)) if len(centre_errors) else nan,
     )
+
+
+# -- identities ---------------------------------------------------------------------------------------
+class IdentitySwaps(NamedTuple):
+    """How often ground-truth targets are followed by a track that is not their own (:func:`identity_swaps`).
+
+    Attributes
+    ----------
+    frames : int
+        Frames in which at least one target is paired with a track other than its identity.
+    pairs : int
+        The (frame, target) pairs in which that happens; at least ``frames``.
+    per_target : dict of int to int
+        For every scored target, in increasing id order: the frames in which it is paired
+        with a track other than its identity (0 for a target that never is).
+    identities : dict of int to int or None
+        For every scored target: the track id it should carry, or None when it has none
+        (then every pairing of it counts).
+    """
+
+    frames: int
+    pairs: int
+    per_target: dict[int, int]
+    identities: dict[int, int | None]
+
+
+def _idf1_identities(accumulator) -> dict[int, int | None]:
+    """Target id -> track id of the IDF1 global one-to-one assignment (motmetrics'), None if unassigned."""
+    motmetrics = require("motmetrics")
+    df_map = motmetrics.metrics.events_to_df_map(accumulator.events)
+    object_frames, track_frames, overlaps = motmetrics.metrics.extract_counts_from_df_map(df_map)
+    assignment = motmetrics.metrics.id_global_assignment(df_map)
+    # The assignment's rows and columns are the sorted ids, followed by one "unassigned" node each.
+    objects, tracks = sorted(object_frames), sorted(track_frames)
+    identities: dict[int, int | None] = {int(o): None for o in objects}
+    for row, column in zip(assignment["rids"], assignment["cids"]):
+        if row < len(objects) and column < len(tracks):
+            target, track = objects[row], tracks[column]
+            # A pair that never overlaps costs the same assigned or not: it is no identity.
+            if overlaps.get((target, track), 0) > 0:
+                identities[int(target)] = int(track)
+    return identities
+
+
+def _given_identities(identities: Any, targets: np.ndarray) -> dict[int, int | None]:
+    """The identity of every scored target, for ``identities="gt"`` or a mapping of target ids to track ids."""
+    if isinstance(identities, str):
+        if identities != "gt":
+            raise TrackingError(f'identities must be None, "gt" or a mapping of target ids to track ids, '
+                                f'got {identities!r}')
+        return {int(t): int(t) for t in targets}
+    if not isinstance(identities, Mapping):
+        raise TrackingError(f"identities must be None, \"gt\" or a mapping of target ids to track ids, "
+                            f"got {type(identities).__name__}")
+    for target, track in identities.items():
+        for value in (target, track):
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+                raise TrackingError(f"identities maps integer target ids to integer track ids, "
+                                    f"got {target!r}: {track!r}")
+    return {int(t): (int(identities[int(t)]) if int(t) in identities else None) for t in targets}
+
+
+def identity_swaps(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5,
+                   identities: str | Mapping[int, int] | None = None) -> IdentitySwaps:
+    """Count the frames in which a ground-truth target is followed by a track that carries another identity.
+
+    Each frame's pairs are those of :func:`evaluate` (and :func:`matched_pairs`): CLEAR MOT
+    matching of the hypotheses to the ground truth at IoU ≥ 0.5 (Hungarian algorithm,
+    matches carried over from the previous frame), hypotheses matched to a flag-0
+    ground-truth box dropped, flag-0 boxes not scored.  Every scored target has an
+    *identity*, the track id it should carry:
+
+    * ``identities="gt"``: its own id.  This is the mode for tracks born from the ground
+      truth (:func:`~belief_tracking.initiation.init_from_gt`), which keep its ids;
+    * ``identities=None`` (the default): the track that the global one-to-one assignment
+      of IDF1 (Ristani et al. 2016, as ``motmetrics`` computes it for :attr:`Scores.idf1`)
+      gives it, so that the count does not depend on how the tracker numbers its tracks;
+      a target that the assignment leaves without a track (or gives one it never
+      overlaps) has none;
+    * a mapping ``{target id: track id}``: as given; a target missing from it has none.
+
+    A pair (frame, target, track) is *swapped* when the track id is not the target's
+    identity.  A frame counts once however many of its pairs are swapped.  A track paired
+    with nobody, and a target paired with nobody, count nothing: misses and false
+    positives are MOTA's business, not this score's.
+
+    Parameters
+    ----------
+    gt, hyp : array_like, shape (N, 6..10) and (M, 6..10)
+        As in :func:`evaluate`.
+    max_iou_distance : float, default 0.5
+        Largest ``1 − IoU`` that still allows a pairing (0.5: IoU ≥ 0.5).
+    identities : None, "gt" or mapping of int to int, default None
+        Where the identities come from (see above).
+
+    Returns
+    -------
+    IdentitySwaps
+        The swapped frames, the swapped (frame, target) pairs, the swapped frames of every
+        target and the identities used.
+
+    Raises
+    ------
+    TrackingError
+        As :func:`evaluate`, and for ``identities`` that are none of the above.
+
+    Examples
+    --------
+    Two targets side by side for four frames; the tracks follow them, then trade places
+    in the last frame:
+
+    >>> gt = np.array([[f, i, 0 if i == 1 else 50, 0, 10, 10, 1] for f in (1, 2, 3, 4) for i in (1, 2)])
+    >>> hyp = gt.copy()
+    >>> hyp[6:, 1] = [2, 1]                                # frame 4: track 2 on target 1, track 1 on target 2
+    >>> identity_swaps(gt, hyp, identities="gt")[:3]       # one frame, two pairs, one frame each
+    (1, 2, {1: 1, 2: 1})
+
+    Tracks numbered otherwise (7 and 8) carry the ground-truth ids nowhere, but the IDF1
+    assignment gives target 1 track 7 and target 2 track 8, and finds the same swap:
+
+    >>> hyp[:, 1] = np.where(hyp[:, 1] == 1, 7, 8)
+    >>> identity_swaps(gt, hyp, identities="gt").frames
+    4
+    >>> swaps = identity_swaps(gt, hyp)
+    >>> swaps.frames, swaps.pairs, swaps.identities
+    (1, 2, {1: 7, 2: 8})
+    """
+    accumulator, gt_rows, hyp_rows, _ = _accumulate(gt, hyp, max_iou_distance)
+    if identities is None:
+        identity = _idf1_identities(accumulator)
+    else:
+        identity = _given_identities(identities, np.unique(gt_rows[gt_rows[:, _FLAG] != 0, _ID]))
+    per_target = dict.fromkeys(sorted(identity), 0)
+    swapped_frames = set()
+    for frame, target, track, _ in _pairs(accumulator, gt_rows, hyp_rows):
+        if identity[int(target)] != int(track):
+            per_target[int(target)] += 1
+            swapped_frames.add(int(frame))
+    return IdentitySwaps(frames=len(swapped_frames), pairs=sum(per_target.values()), per_target=per_target,
+                         identities=identity)

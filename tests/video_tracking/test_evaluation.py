@@ -15,7 +15,7 @@ from belief.errors import BeliefError
 from belief_tracking import motfiles
 from belief_tracking.cli import register_eval
 from belief_tracking.errors import TrackFileError, TrackingError
-from belief_tracking.evaluation import Scores, evaluate, iou_distance
+from belief_tracking.evaluation import IdentitySwaps, Scores, evaluate, identity_swaps, iou_distance
 from belief_tracking.motfiles import read_mot
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
@@ -214,6 +214,98 @@ def test_scores_is_frozen_and_its_table_names_every_score():
         "matched_pairs", "num_objects", "num_predictions", "ignored_predictions", "num_frames",
         "mean_centre_error", "median_centre_error"]
     assert isinstance(Scores(**scores.to_dict()), Scores)
+
+
+# -- identity swaps ----------------------------------------------------------------------------------
+def crossed_midway(first_ids=(1, 2), swap_from=6):
+    """Two targets over frames 1-10 and two tracks that follow them, then each other's from ``swap_from`` on.
+
+    The tracks carry ``first_ids``: the ground-truth ids by default, as tracks born from the
+    ground truth do.
+    """
+    gt, hyp, _ = swapped_halfway()
+    own = np.where(gt[:, 1] == 1, *first_ids)
+    other = np.where(gt[:, 1] == 1, first_ids[1], first_ids[0])
+    hyp[:, 1] = np.where(gt[:, 0] >= swap_from, other, own)
+    return gt, hyp
+
+
+def test_tracks_that_keep_the_ground_truth_ids_swap_nothing():
+    gt = three_targets()
+    for mode in ("gt", None):
+        swaps = identity_swaps(gt, gt.copy(), identities=mode)
+        assert swaps == IdentitySwaps(frames=0, pairs=0, per_target={1: 0, 2: 0, 3: 0},
+                                      identities={1: 1, 2: 2, 3: 3})
+
+
+def test_a_swap_in_the_middle_of_the_tracks_counts_each_of_its_frames():
+    gt, hyp = crossed_midway(swap_from=6)      # frames 6-10 swapped, both targets in each
+    swaps = identity_swaps(gt, hyp, identities="gt")
+    assert (swaps.frames, swaps.pairs, swaps.per_target) == (5, 10, {1: 5, 2: 5})
+    # the CLEAR MOT switches count the moment of the swap once per target, not its length
+    assert evaluate(gt, hyp).id_switches == 2
+
+
+def test_a_swap_of_one_target_counts_its_frames_once_each():
+    gt, hyp = crossed_midway(swap_from=8)
+    hyp = hyp[~((hyp[:, 0] >= 8) & (gt[:, 1] == 2))]   # the second track is lost instead of swapped
+    swaps = identity_swaps(gt, hyp, identities="gt")
+    assert (swaps.frames, swaps.pairs, swaps.per_target) == (3, 3, {1: 3, 2: 0})
+
+
+def test_the_idf1_assignment_finds_the_identities_of_tracks_numbered_otherwise():
+    gt, hyp = crossed_midway(first_ids=(7, 8), swap_from=8)
+    assert identity_swaps(gt, hyp, identities="gt").frames == 10      # no track carries a ground-truth id
+    swaps = identity_swaps(gt, hyp)
+    # tracks 7 and 8 follow targets 1 and 2 for 7 of 10 frames: those are their identities
+    assert swaps.identities == {1: 7, 2: 8}
+    assert (swaps.frames, swaps.pairs, swaps.per_target) == (3, 6, {1: 3, 2: 3})
+
+
+def test_consistently_relabelled_tracks_swap_nothing_in_automatic_mode():
+    gt = three_targets()
+    swaps = identity_swaps(gt, shifted(gt, 1.0, 0.0, id_offset=40))
+    assert (swaps.frames, swaps.pairs) == (0, 0) and swaps.identities == {1: 41, 2: 42, 3: 43}
+
+
+def test_tracks_paired_with_nobody_do_not_count():
+    gt = three_targets()
+    far = track(2, range(1, 21), 700, 700)            # another target's id, but on nobody
+    stray = track(99, range(5, 9), 0, 400)            # an id of nobody's, on nobody
+    swaps = identity_swaps(gt, np.vstack([gt[gt[:, 1] != 2], far, stray]), identities="gt")
+    assert (swaps.frames, swaps.pairs) == (0, 0)
+    assert swaps.per_target == {1: 0, 2: 0, 3: 0}     # target 2 is missed, which MOTA counts, not this
+
+
+def test_flag_zero_ground_truth_carries_no_identity():
+    frames = range(1, 11)
+    gt = np.vstack([track(1, frames, 0, 0), track(2, frames, 200, 200, flag=0)])
+    hyp = np.vstack([track(1, frames, 0, 0), track(5, frames, 200, 200)])   # track 5 on the ignored box
+    for mode in ("gt", None):
+        swaps = identity_swaps(gt, hyp, identities=mode)
+        assert (swaps.frames, swaps.pairs, swaps.per_target) == (0, 0, {1: 0})
+    swapped = hyp.copy()
+    swapped[:, 1] = np.where(hyp[:, 1] == 1, 5, 1)    # the same boxes, ids traded: now target 1 carries 5
+    assert identity_swaps(gt, swapped, identities="gt")[:3] == (10, 10, {1: 10})
+
+
+def test_given_identities_and_targets_without_one():
+    gt, hyp = crossed_midway(swap_from=6)
+    assert identity_swaps(gt, hyp, identities={1: 2, 2: 1})[:2] == (5, 10)    # frames 1-5 are the swapped ones
+    partial = identity_swaps(gt, hyp, identities={1: 1})                       # target 2 has no identity
+    assert partial.identities == {1: 1, 2: None} and partial.per_target == {1: 5, 2: 10}
+    missed = identity_swaps(gt, np.zeros((0, 7)))
+    assert missed.identities == {1: None, 2: None} and missed.frames == 0
+    astray = identity_swaps(gt, np.vstack([gt[gt[:, 1] == 1], track(9, range(1, 11), 700, 700)]))
+    assert astray.identities == {1: 1, 2: None}                 # a track it never overlaps is no identity
+
+
+@pytest.mark.parametrize("identities, message", [("own", "identities"), ([1, 2], "mapping"),
+                                                 ({1: "one"}, "integer"), ({1.5: 1}, "integer")])
+def test_identity_swaps_rejects_identities_of_no_known_kind(identities, message):
+    gt, hyp = crossed_midway()
+    with pytest.raises(TrackingError, match=message):
+        identity_swaps(gt, hyp, identities=identities)
 
 
 # -- iou_distance ----------------------------------------------------------------------------------

@@ -9,8 +9,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from belief_tracking import scene_config, scene_presets, scene_render, scenes
 from belief_tracking.errors import TrackingError
 from belief_tracking.scenes import (
+    CROWDS,
     PRESETS,
     BackgroundStyle,
     Lighting,
@@ -19,6 +21,7 @@ from belief_tracking.scenes import (
     StaticShape,
     Walker,
     crossing,
+    crowd,
     demo,
     entering_leaving,
     illumination,
@@ -349,6 +352,95 @@ def test_the_entering_leaving_walkers_come_in_and_go_out_at_the_documented_frame
     shirts = np.array([w.shirt for w in config.walkers], dtype=float)
     assert min(np.abs(a - b).max() for i, a in enumerate(shirts) for b in shirts[i + 1:]) > 100
     assert len({tuple(c // 32) for c in shirts.astype(int)}) == 3  # three bins of an 8 x 8 x 8 histogram
+
+
+# -- the crowds ----------------------------------------------------------------------------------------
+
+def boxes_over_time(walker: Walker, n_frames: int) -> np.ndarray:
+    return np.array([walker.box_at(t) for t in range(n_frames)])
+
+
+def overlapping(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Per frame, whether boxes ``a[t]`` and ``b[t]`` (x, y, w, h) share pixels."""
+    return ((a[:, 0] < b[:, 0] + b[:, 2]) & (b[:, 0] < a[:, 0] + a[:, 2])
+            & (a[:, 1] < b[:, 1] + b[:, 3]) & (b[:, 1] < a[:, 1] + a[:, 3]))
+
+
+def test_the_crowds_have_a_registry_of_their_own():
+    assert CROWDS == {"crowd": crowd}
+    assert not set(CROWDS) & set(PRESETS)
+    config = crowd(5)
+    assert config.seed == 5 and config.name == "crowd"
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_a_crowd_is_twelve_walkers_dressed_alike_but_not_identically(seed):
+    config = crowd(seed)
+    assert len(config.walkers) == 12 and 100 <= config.n_frames <= 200
+    assert sorted(w.id for w in config.walkers) == list(range(1, 13))
+    shirts = np.array([w.shirt for w in config.walkers])
+    trousers = np.array([w.trousers for w in config.walkers])
+    assert np.abs(shirts - scenes.CROWD_SHIRT).max() <= 14 and np.abs(trousers - scenes.CROWD_TROUSERS).max() <= 10
+    assert len({(w.shirt, w.trousers, w.head) for w in config.walkers}) == 12
+    # one bin of an 8 x 8 x 8 colour histogram for all the shirts, one for all the trousers
+    assert len({tuple(c) for c in shirts // 32}) == 1 and len({tuple(c) for c in trousers // 32}) == 1
+    sizes = np.array([w.size for w in config.walkers])
+    assert np.all(sizes.max(axis=0) / sizes.min(axis=0) < 1.3)
+    assert sum(w.velocity[0] > 0 for w in config.walkers) == 6
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_every_crowd_walker_stays_in_view_and_crosses_several_others(seed):
+    config = crowd(seed)
+    boxes = {w.id: boxes_over_time(w, config.n_frames) for w in config.walkers}
+    for walker_boxes in boxes.values():
+        assert np.all(walker_boxes[:, :2] >= 0)
+        assert np.all(walker_boxes[:, 0] + walker_boxes[:, 2] <= config.width)
+        assert np.all(walker_boxes[:, 1] + walker_boxes[:, 3] <= config.height)
+    crossed = []
+    for walker in config.walkers:
+        crossed.append(0)
+        for other in config.walkers:
+            if other.id == walker.id:
+                continue
+            shared = overlapping(boxes[walker.id], boxes[other.id])
+            if (other.velocity[0] > 0) != (walker.velocity[0] > 0):
+                crossed[-1] += bool(shared.any())
+            else:
+                assert not shared.any()           # walking the same way, one behind the other
+    assert min(crossed) >= 2 and np.mean(crossed) >= 4
+
+
+def test_the_crowd_hides_everybody_but_the_nearest_walker_at_some_point():
+    scene = render(replace(crowd(0), noise_std=0.0))    # the sensor noise, the slow part, changes no visibility
+    gt = scene.ground_truth
+    assert np.array_equal(np.bincount(gt[:, 0])[1:], np.full(scene.config.n_frames, 12))  # all in view
+    lowest = {walker_id: scene.visibility[gt[:, 1] == walker_id].min() for walker_id in scene.ids}
+    nearest = min(scene.config.walkers, key=lambda w: w.depth).id
+    assert lowest.pop(nearest) == 1.0
+    assert all(v < 1.0 for v in lowest.values())
+    assert sum(v < 0.2 for v in lowest.values()) >= 4           # some nearly wholly
+
+
+def test_a_crowd_is_drawn_from_its_seed_alone():
+    assert crowd(2) == crowd(2)
+    assert crowd(2).walkers != crowd(3).walkers
+    short = replace(crowd(2), n_frames=6)
+    first, again = render(short), render(short)
+    assert first.frames.tobytes() == again.frames.tobytes()
+    assert np.array_equal(first.ground_truth, again.ground_truth)
+    # the layout's random stream is not the background's: the same crowd on another background
+    elsewhere = render(replace(short, seed=9))
+    assert np.array_equal(elsewhere.ground_truth, first.ground_truth)
+    assert not np.array_equal(elsewhere.frames[0], first.frames[0])
+
+
+def test_the_scenes_module_re_exports_every_public_name_of_its_parts():
+    parts = (scene_config, scene_presets, scene_render)
+    assert sorted(scenes.__all__) == sorted(name for part in parts for name in part.__all__)
+    for part in parts:
+        for name in part.__all__:
+            assert getattr(scenes, name) is getattr(part, name)
 
 
 # -- files ---------------------------------------------------------------------------------------------

@@ -1,0 +1,123 @@
+"""Identity swaps on the crowd scenes: twelve walkers dressed alike, tracked from the ground truth.
+
+Run from the repository root::
+
+    python benchmarks/identity_crowd.py                       # crowd scenes 0-4, tracker seed 0
+    python benchmarks/identity_crowd.py --scenes 0 1 --seeds 0 1 2
+    python benchmarks/identity_crowd.py --set particles=50 --set "belief.rule='dempster'"   # tracker settings, TOML
+    python benchmarks/identity_crowd.py --check 245           # exit 1 if more frames have a swap than before
+    python benchmarks/identity_crowd.py --jobs 1              # one process (default: one per core)
+
+Each run renders the crowd scene of a seed (:func:`belief_tracking.scenes.crowd`: 150 frames
+of 320 x 240, twelve walkers in close reds and dark blues who cross each other's paths), starts
+a track at each ground-truth id's first box and removes it after its last
+(:func:`~belief_tracking.initiation.init_from_gt`, as ``belief track --init-from-gt``), and
+tracks with the default :class:`~belief_tracking.config.TrackerConfig` but for the ``--set``
+settings (lines of TOML, as in an experiment file: strings are quoted, a dotted key names a
+setting of a table), from ``numpy.random.default_rng(tracker seed)``.  The tracks keep the ground-truth
+ids, so a target's identity is its own id.
+
+A row per scene and tracker seed gives the frames in which some target is paired with a
+track that carries another id (:func:`~belief_tracking.evaluation.identity_swaps` with
+``identities="gt"``: the CLEAR MOT pairs of
+:func:`~belief_tracking.evaluation.evaluate`, IoU >= 0.5), the (frame, target) pairs so
+swapped, MOTA, IDF1, the CLEAR MOT identity switches and the seconds the run took (rendering
+included; runs in parallel share the cores).  The last row sums the counts and the seconds
+and averages MOTA and IDF1.  ``--check MAX`` is the acceptance check of identities: the
+frames with a swapped identity, summed over the runs, are at most MAX.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from belief_tracking.config import TrackerConfig  # noqa: E402
+from belief_tracking.errors import TrackingError  # noqa: E402
+from belief_tracking.evaluation import evaluate, identity_swaps  # noqa: E402
+from belief_tracking.initiation import init_from_gt  # noqa: E402
+from belief_tracking.scenes import crowd, render  # noqa: E402
+from belief_tracking.tracker import Tracker  # noqa: E402
+
+
+def settings_of(assignments: list[str]) -> dict:
+    """The TrackerConfig settings of ``KEY=VALUE`` lines of TOML: a dotted key fills a nested table."""
+    try:
+        return tomllib.loads("\n".join(assignments))
+    except tomllib.TOMLDecodeError as exc:
+        raise TrackingError(f"--set takes KEY=VALUE in TOML, e.g. particles=50 or belief.rule='dempster' "
+                            f"({exc})") from None
+
+
+def track(scene_seed: int, tracker_seed: int, settings: dict) -> dict:
+    """Track the crowd of ``scene_seed`` from its ground truth and score the identities."""
+    started = time.perf_counter()
+    scene = render(crowd(scene_seed))
+    tracker = Tracker(TrackerConfig.from_settings(settings, "--set"), init_from_gt(scene.ground_truth),
+                      np.random.default_rng(tracker_seed))
+    rows = [row for result in tracker.track(scene.frames) for row in result.mot_rows()]
+    tracks = np.array(rows, dtype=np.float64).reshape(-1, 10)
+    swaps = identity_swaps(scene.ground_truth, tracks, identities="gt")
+    scores = evaluate(scene.ground_truth, tracks)
+    return {"scene": scene_seed, "seed": tracker_seed, "frames": swaps.frames, "pairs": swaps.pairs,
+            "mota": scores.mota, "idf1": scores.idf1, "id_switches": scores.id_switches,
+            "seconds": time.perf_counter() - started}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scenes", nargs="+", type=int, default=[0, 1, 2, 3, 4], metavar="SEED",
+                        help="seeds of the crowd scenes (default: 0 1 2 3 4)")
+    parser.add_argument("--seeds", nargs="+", type=int, default=[0], metavar="SEED",
+                        help="seeds of the tracker (default: 0)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="a tracker setting as a line of TOML, e.g. --set particles=50 or "
+                             "--set \"belief.rule='dempster'\" (repeatable)")
+    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--check", type=int, metavar="MAX",
+                        help="exit 1 if the frames with a swapped identity, summed over the runs, exceed MAX")
+    args = parser.parse_args(argv)
+    try:
+        settings = settings_of(args.set)
+        TrackerConfig.from_settings(settings, "--set")  # a bad setting fails here, not in every worker
+    except TrackingError as exc:
+        parser.error(str(exc))
+    jobs = [(scene, seed, settings) for scene in args.scenes for seed in args.seeds]
+    print(f"crowd scenes {args.scenes}, tracker seeds {args.seeds}, born from the ground truth"
+          + (f", --set {' '.join(args.set)}" if args.set else ""))
+    print(f"{'scene':>5} {'seed':>4} {'swapped frames':>14} {'swapped pairs':>13} {'MOTA':>7} {'IDF1':>7} "
+          f"{'ID sw':>6} {'seconds':>8}")
+    with ProcessPoolExecutor(max(1, min(args.jobs, len(jobs)))) as pool:
+        runs = list(pool.map(track, *zip(*jobs)))
+    for run in runs:
+        print(f"{run['scene']:>5} {run['seed']:>4} {run['frames']:>14} {run['pairs']:>13} {run['mota']:>7.3f} "
+              f"{run['idf1']:>7.3f} {run['id_switches']:>6} {run['seconds']:>8.1f}")
+    total = sum(run["frames"] for run in runs)
+    mota, idf1 = (statistics.fmean(run[key] for run in runs) for key in ("mota", "idf1"))
+    print(f"{'total':<10} {total:>14} {sum(run['pairs'] for run in runs):>13} {mota:>7.3f} {idf1:>7.3f} "
+          f"{sum(run['id_switches'] for run in runs):>6} {sum(run['seconds'] for run in runs):>8.1f}"
+          "   (MOTA and IDF1: means)")
+    if args.check is not None:
+        print(f"frames with a swapped identity: {total}, at most {args.check} allowed: "
+              f"{'PASS' if total <= args.check else 'FAIL'}")
+        return 1 if total > args.check else 0
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
