@@ -115,7 +115,7 @@ class Tracker:
         The live tracks and the memory of the lost ones.
     weighting : Weighting
         The active weighting strategy.
-    tracks : TrackManager
+    manager : TrackManager
         Births, deaths, losses and re-identification of the store's tracks.
     diagnostic_columns : tuple of str
         The columns of every :class:`FrameDiagnostics` (:func:`diagnostic_columns`).
@@ -146,7 +146,7 @@ class Tracker:
         self.appearance_cues = [cue for cue in self.cues if isinstance(cue, AppearanceCue)]
         self.background = BackgroundModel(config.background) if config.uses_background else None
         self.store = TrackStore()
-        self.tracks = TrackManager(config, init, self.appearance_cues, rng, self.store)
+        self.manager = TrackManager(config, init, self.appearance_cues, rng, self.store)
         self.observe = FrameObserver(config, self.background)
         self.associate = Association(config.initiation, self.appearance_cues)
         self.weighting = make_weighting(config.fusion, config.belief, config.adaptive_fusion, config.cues, feature_rng)
@@ -211,8 +211,8 @@ class Tracker:
         view = self._observe(frame, image, detections)                         # 1. the frame
         tracks = self.store.tracks
         if not tracks:                                                         # nothing to filter: births only
-            return self._result(view, self.tracks.births_and_deaths(view, []), self.diagnostics.empty(), started)
-        moved = self.predict(tracks, self.tracks.perspective, self.rng)        # 2. W-S2
+            return self._result(view, self.manager.births_and_deaths(view, []), self.diagnostics.empty(), started)
+        moved = self.predict(tracks, self.manager.perspective, self.rng)        # 2. W-S2
         obs = self._observation(view, tracks)
         assigned = self._associate(obs, view, tracks)                          # 3. candidates to tracks
         evidence = self._score(obs, moved, tracks, assigned)                   # 4. W-S3
@@ -236,8 +236,8 @@ class Tracker:
         view = self.observe(frame, image, detections, [t.box() for t in self.store])
         if self.predict is None:
             self.predict = Prediction(self.config.motion, self.observe.image_shape)
-            self.tracks.start(self.observe.image_shape)
-        self.tracks.end_planned(frame)
+            self.manager.start(self.observe.image_shape)
+        self.manager.end_planned(frame)
         return view
 
     def _observation(self, view: FrameView, tracks: Sequence[Track]) -> Observation:
@@ -277,9 +277,9 @@ class Tracker:
                 assigned: np.ndarray | None) -> list[Estimate]:
         """Stage 9: the tracks that took a candidate follow it; then births, losses, deaths and re-identification."""
         if assigned is not None:
-            self.tracks.follow_candidates(view.number, tracks, assigned, view.candidates, view.detector)
+            self.manager.follow_candidates(view.number, tracks, assigned, view.candidates, view.detector)
         likeness = self._likeness(obs, tracks, assigned)
-        return self.tracks.births_and_deaths(view, [Estimate.of(t, view.number) for t in tracks], assigned, likeness)
+        return self.manager.births_and_deaths(view, [Estimate.of(t, view.number) for t in tracks], assigned, likeness)
 
     def _likeness(self, obs: Observation, tracks: Sequence[Track], assigned: np.ndarray | None) -> np.ndarray | None:
         """How much each track's window at its estimate still looks like its templates, shape (τ,).

@@ -125,7 +125,7 @@ def test_tracker_sizes_windows_by_perspective_once_two_rows_are_known():
     plan = init_from_boxes([(40, 20, 10, 30), (200, 120, 20, 60)])
     tracker = Tracker(TrackerConfig(particles=10, cues=("location",)), plan, np.random.default_rng(0))
     tracker.step(1, image)
-    perspective = tracker.tracks.perspective
+    perspective = tracker.manager.perspective
     assert perspective is not None
     estimates = tracker.step(2, image).estimates
     for estimate, target in zip(estimates, tracker.targets):
@@ -135,7 +135,7 @@ def test_tracker_sizes_windows_by_perspective_once_two_rows_are_known():
     single = Tracker(TrackerConfig(particles=10, cues=("location",)), init_from_boxes([(40, 20, 10, 30)]),
                      np.random.default_rng(0))
     single.step(1, image)
-    assert single.tracks.perspective is None
+    assert single.manager.perspective is None
     assert all(e.state[4] == 0.0 and e.box[2:] == (10.0, 30.0) for e in single.step(2, image).estimates)
     with pytest.raises(TrackingError, match="masses must be one of"):
         TrackerConfig(belief=FusionConfig(masses="odd"))
