@@ -59,7 +59,7 @@ def test_a_lost_track_is_remembered_where_a_candidate_last_saw_it_or_where_it_wa
     seen = store.add(track(1, templates={"colour": np.array([1.0, 0.0]), "edges": np.array([0.5, 0.5])}))
     seen.last_seen = (4, np.array([11.0, 21.0, 8.0, 16.0]))
     seen.estimate[2:4] = (1.5, -0.5)
-    unseen = store.add(track(2, (50.0, 20.0, 8.0, 16.0), planned=True))
+    store.add(track(2, (50.0, 20.0, 8.0, 16.0), planned=True))
     memory = store.lose(1, frame=9)
     assert isinstance(memory, LostTrack) and store.lost == {1: memory} and store.ids == [2]
     assert memory.frame == 4 and memory.box.tolist() == [11.0, 21.0, 8.0, 16.0]
