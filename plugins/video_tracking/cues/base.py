@@ -16,7 +16,7 @@ import numpy as np
 from ..errors import TrackingError
 from .observation import Observation
 
-__all__ = ["Cue", "AppearanceCue", "positive_setting", "count_setting", "samples_setting", "log_gaussian"]
+__all__ = ["Cue", "AppearanceCue", "ConfiguredCue", "positive_setting", "count_setting", "samples_setting", "log_gaussian"]
 
 
 @runtime_checkable
@@ -55,6 +55,31 @@ class AppearanceCue(Cue, Protocol):
     def histograms(self, obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
         """The histograms of the windows of P particles, shape (P, B), as the templates are built."""
         ...
+
+
+class ConfiguredCue:
+    """What every cue shares: its frozen settings of type ``config_type``, checked once, and its repr.
+
+    >>> from belief_tracking.cues import LocationCue
+    >>> LocationCue("sigma=3")
+    Traceback (most recent call last):
+    ...
+    belief_tracking.errors.TrackingError: LocationCue needs a LocationConfig, got str
+    """
+
+    config_type: type
+
+    def __init__(self, config=None) -> None:
+        if config is None:
+            config = self.config_type()
+        if not isinstance(config, self.config_type):
+            wanted = self.config_type.__name__
+            raise TrackingError(f"{type(self).__name__} needs {'an' if wanted[0] in 'AEIOU' else 'a'} {wanted}, "
+                                f"got {type(config).__name__}")
+        self.config = config
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.config!r})"
 
 
 def positive_setting(owner: str, name: str, value) -> float:

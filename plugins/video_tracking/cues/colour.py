@@ -9,7 +9,7 @@ import numpy as np
 
 from ..boxes import box_centres, check_boxes
 from ..errors import TrackingError
-from .base import count_setting, log_gaussian, positive_setting, samples_setting
+from .base import ConfiguredCue, count_setting, log_gaussian, positive_setting, samples_setting
 from .histograms import (
     MAX_BINS_PER_CHANNEL,
     Sampling,
@@ -60,7 +60,7 @@ class ColourConfig:
         return self.bins ** 3
 
 
-class ColourCue:
+class ColourCue(ConfiguredCue):
     """Colour similarity of every particle to every target and to the rest of the scene (W (16)–(19)).
 
     For the kernel-weighted histogram h of a particle's box (L (9)–(11)) and a reference q,
@@ -100,18 +100,6 @@ class ColourCue:
 
     #: Whether the window histograms count the foreground only (which points lie in the image matters).
     masked: ClassVar[bool] = False
-
-    def __init__(self, config=None) -> None:
-        if config is None:
-            config = self.config_type()
-        if not isinstance(config, self.config_type):
-            wanted = self.config_type.__name__
-            raise TrackingError(f"{type(self).__name__} needs {'an' if wanted[0] in 'AEIOU' else 'a'} {wanted}, "
-                                f"got {type(config).__name__}")
-        self.config = config
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({self.config!r})"
 
     # -- what is counted ----------------------------------------------------------------------
     def image_features(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:

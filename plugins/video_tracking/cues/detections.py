@@ -8,8 +8,7 @@ from typing import ClassVar
 import numpy as np
 
 from .. import checks
-from ..errors import TrackingError
-from .base import positive_setting
+from .base import ConfiguredCue, positive_setting
 from .observation import Observation, checked_particles
 
 __all__ = ["DetectionConfig", "DetectionCue"]
@@ -38,7 +37,7 @@ class DetectionConfig:
         object.__setattr__(self, "reliability", checks.fraction("DetectionConfig.reliability", self.reliability))
 
 
-class DetectionCue:
+class DetectionCue(ConfiguredCue):
     """How well a particle agrees with the frame's detections, each discounted by its score.
 
     Each detection i with box centre (x_i, y_i), size (w_i, h_i) and score s_i is a source of
@@ -75,14 +74,6 @@ class DetectionCue:
 
     name: ClassVar[str] = "detections"
     config_type: ClassVar[type] = DetectionConfig
-
-    def __init__(self, config: DetectionConfig = DetectionConfig()) -> None:
-        if not isinstance(config, DetectionConfig):
-            raise TrackingError(f"DetectionCue needs a DetectionConfig, got {type(config).__name__}")
-        self.config = config
-
-    def __repr__(self) -> str:
-        return f"DetectionCue({self.config!r})"
 
     def log_likelihoods(self, obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
         """log p_1 … log p_τ, log p_FA of every particle, shape (P, τ + 1)."""

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..boxes import box_centres
 from ..errors import TrackingError
-from .colour import ColourConfig, ColourCue
+from .colour import ColourCue
 from .histograms import Sampling, kernel_histograms, sample_counts
 from .observation import Observation
 
@@ -38,6 +38,7 @@ class ForegroundColourCue(ColourCue):
     >>> image[20:40, 30:40] = (0, 0, 255)
     >>> mask = np.zeros((60, 80), bool)
     >>> mask[20:40, 30:40] = True
+    >>> from belief_tracking.cues import ColourConfig
     >>> cue = ForegroundColourCue(ColourConfig(samples=(6, 12)))
     >>> templates = cue.build_templates(image, np.array([[30, 20, 10, 20]]), foreground=mask)
     >>> obs = Observation(image, mask, [[35.0, 30.0]], [[10.0, 20.0]], np.zeros((0, 2)),

@@ -8,8 +8,7 @@ from typing import ClassVar
 import numpy as np
 
 from .. import checks
-from ..errors import TrackingError
-from .base import log_gaussian, positive_setting
+from .base import ConfiguredCue, log_gaussian, positive_setting
 from .observation import Observation, checked_particles
 
 __all__ = ["LocationConfig", "LocationCue", "squared_distances"]
@@ -46,7 +45,7 @@ class LocationConfig:
         object.__setattr__(self, "literal", checks.flag("LocationConfig.literal", self.literal))
 
 
-class LocationCue:
+class LocationCue(ConfiguredCue):
     """Where a particle lies with respect to the previous estimates (W (22)–(24)).
 
     Target j: log p_j = −‖x − ĉ_j‖² / (2σ²), the log of G(‖x − ĉ_j‖; σ) (W (22)), with x the
@@ -83,14 +82,6 @@ class LocationCue:
 
     name: ClassVar[str] = "location"
     config_type: ClassVar[type] = LocationConfig
-
-    def __init__(self, config: LocationConfig = LocationConfig()) -> None:
-        if not isinstance(config, LocationConfig):
-            raise TrackingError(f"LocationCue needs a LocationConfig, got {type(config).__name__}")
-        self.config = config
-
-    def __repr__(self) -> str:
-        return f"LocationCue({self.config!r})"
 
     def log_likelihoods(self, obs: Observation, states: np.ndarray, owner: np.ndarray) -> np.ndarray:
         """log p_1 … log p_τ, log p_FA of every particle, shape (P, τ + 1) (W (22)–(24)).
