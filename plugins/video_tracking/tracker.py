@@ -296,7 +296,8 @@ class Tracker:
         likeness = np.full(len(tracks), np.nan)
         if needed.size:
             states = np.array([tracks[k].estimate for k in needed])
-            current = obs.with_templates(stacked_templates(tracks, self.appearance_cues))
+            updated = self.appearance is not None and self.appearance.update
+            current = obs.with_templates(stacked_templates(tracks, self.appearance_cues)) if updated else obs
             likeness[needed] = template_similarity(self.appearance_cues, current, states, needed)
         return likeness
 

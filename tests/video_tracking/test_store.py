@@ -96,8 +96,10 @@ def test_a_re_identified_track_takes_back_the_planned_flag_of_its_id():
     assert store.reidentify(5, 1).planned
 
 
-def test_particles_and_state_of_a_record_are_its_own():
-    record = track(1)
-    record.particles = ParticleSet(np.zeros((2, 5)))
-    other = track(1)
-    assert len(other.particles) == 3                      # records share nothing
+def test_a_newborn_record_owns_its_template_table_and_initial_templates():
+    given = {"colour": np.array([0.25, 0.75])}
+    record = Track.born(1, (0.0, 0.0, 2.0, 2.0), np.zeros((2, 5)), given)
+    given["edges"] = np.array([1.0, 0.0])                # the caller's table is not the record's
+    given["colour"][0] = 0.5                             # nor is the initial template a view of its array
+    assert sorted(record.templates) == ["colour"]
+    assert record.initial_templates["colour"].tolist() == [0.25, 0.75]
