@@ -21,6 +21,7 @@ import numpy as np
 from belief.errors import FrameError, InvalidMassError, TotalConflictError, UndefinedTransformError
 from belief.frame import Element, Frame
 from belief.model import Model, _show
+from belief.incidence import SPARSE_TABLE_ENTRIES, Incidence, incidence
 from belief.plan import weighted_sum
 
 __all__ = ["MassBatch", "measure_plan", "MeasurePlan", "SUM_TOLERANCE", "resolve_model", "check_select"]
@@ -68,6 +69,24 @@ class MeasurePlan:
     model: Model
     focal: tuple[Element, ...]
     queries: tuple[Element, ...]
+
+    @cached_property
+    def sparse(self) -> Incidence | None:
+        """The tables as one entry per hypothesis of each focal element (:mod:`belief.incidence`), where that applies
+        and the dense tables would hold more than :data:`~belief.incidence.SPARSE_TABLE_ENTRIES` entries."""
+        if len(self.focal) * len(self.queries) <= SPARSE_TABLE_ENTRIES:
+            return None
+        return incidence(self.focal, self.queries, self.model)
+
+    def weigh(self, values: np.ndarray, relation: str) -> np.ndarray:
+        """Σ_X values[:, X] · table[X, q] for the table of ``relation`` (an attribute name), shape (N, Q).
+
+        The same bits as :func:`~belief.plan.weighted_sum` of the dense table, which it is for small tables.
+        """
+        sparse = self.sparse
+        if sparse is not None:
+            return sparse.weigh(values, relation)
+        return weighted_sum(values, getattr(self, relation))
 
     def _table(self, relation) -> np.ndarray:
         table = np.array(
@@ -143,6 +162,15 @@ class MeasurePlan:
         return np.array(
             [[float(self.unit[z] and zel <= xel) for xel in focal] for z, zel in enumerate(focal)]
         ).reshape(len(focal), len(focal))
+
+
+@lru_cache(maxsize=256)
+def _resolved(model: Model, queries: tuple) -> tuple[Element, ...]:
+    """Queries (propositions or elements) in canonical form under the model; the same list of queries comes back."""
+    frame = model.frame
+    if model.kind == "shafer" and queries is frame.singletons:
+        return queries                          # the hypotheses are their own form under Shafer's model
+    return tuple(model.reduce(frame.element(q)) for q in queries)
 
 
 @lru_cache(maxsize=1024)
@@ -495,7 +523,10 @@ class MassBatch:
         single = isinstance(queries, (str, Element))
         if single:
             queries = [queries]
-        resolved = tuple(self.model.reduce(self.model.frame.element(q)) for q in queries)
+        try:
+            resolved = _resolved(self.model, queries if type(queries) is tuple else tuple(queries))
+        except TypeError:                       # an unhashable query: frame.element says what is wrong with it
+            resolved = tuple(self.model.reduce(self.model.frame.element(q)) for q in queries)
         return measure_plan(self.model, self.focal, resolved), single
 
     @staticmethod
@@ -546,12 +577,12 @@ class MassBatch:
             Shape (N,) for one query or with ``select``, (N, Q) for a list of Q queries.
         """
         plan, single = self._plan(queries)
-        return self._finish(weighted_sum(self.values, plan.subset), single, select)
+        return self._finish(plan.weigh(self.values, "subset"), single, select)
 
     def pls(self, queries, *, select=None) -> np.ndarray:
         """Plausibility Pls(A) = Σ_{B∩A≠∅} m(B) (W (9)); shapes and ``select`` as :meth:`bel`."""
         plan, single = self._plan(queries)
-        return self._finish(weighted_sum(self.values, plan.meets), single, select)
+        return self._finish(plan.weigh(self.values, "meets"), single, select)
 
     def mass(self, queries, *, select=None) -> np.ndarray:
         """The mass m(A) of each query (0 for an element that is not focal); shapes and ``select`` as :meth:`bel`.
@@ -567,12 +598,12 @@ class MassBatch:
         array([0.4, 0.1])
         """
         plan, single = self._plan(queries)
-        return self._finish(weighted_sum(self.values, plan.equal), single, select)
+        return self._finish(plan.weigh(self.values, "equal"), single, select)
 
     def q(self, queries) -> np.ndarray:
         """Commonality q(A) = Σ_{B⊇A} m(B); shape (N,) or (N, Q)."""
         plan, single = self._plan(queries)
-        return self._shape(weighted_sum(self.values, plan.superset), single)
+        return self._shape(plan.weigh(self.values, "superset"), single)
 
     commonality = q
 
@@ -589,7 +620,7 @@ class MassBatch:
         """
         check_cardinality_range(self, "BetP")
         plan, single = self._plan(queries)
-        return self._finish(weighted_sum(self._normal_values("BetP"), plan.ratio), single, select)
+        return self._finish(plan.weigh(self._normal_values("BetP"), "ratio"), single, select)
 
     def dsmp(self, queries, epsilon: float = 0.001) -> np.ndarray:
         """DSmP_ε(A), the proportional probabilistic transformation of DSmT.
@@ -620,7 +651,7 @@ class MassBatch:
 
     def pignistic(self) -> np.ndarray:
         """BetP of every hypothesis θ_1..θ_n, shape (N, n)."""
-        return self.betp(list(self.frame.singletons))
+        return self.betp(self.frame.singletons)
 
     # -- operations ----------------------------------------------------------------------------------
     def _regroup(self, targets: Sequence[Element], scale: np.ndarray | None = None) -> "MassBatch":
@@ -733,7 +764,8 @@ def check_cardinality_range(mass, what: str, epsilon: float | None = None) -> No
         if not math.isfinite(epsilon) or epsilon < 0:
             return
     model = mass.model
-    if len(model.frame) < 1023 and (epsilon is None or epsilon <= 1.0):
+    # C_M(X) ≤ 2^n - 1, and under Shafer's model C_M(X) ≤ n.
+    if (len(model.frame) < 1023 or model.kind == "shafer") and (epsilon is None or epsilon <= 1.0):
         return
     biggest, focal = max((model.cardinality(x), i) for i, x in enumerate(mass.focal))
     x = mass.focal[focal]

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Union
 
 import numpy as np
@@ -24,6 +25,7 @@ from belief.distances import _as_batch
 from belief.errors import MeasureOptionError, UnknownMeasureError
 from belief.frame import Element
 from belief.mass import MassFunction
+from belief.model import Model
 
 __all__ = ["decide", "Decision", "DecisionBatch", "CRITERIA", "DEFAULT_TOLERANCE"]
 
@@ -119,8 +121,7 @@ class DecisionBatch:
 def _candidates(batch: MassBatch, candidates) -> tuple[Element, ...]:
     model = batch.model
     if candidates is None:
-        chosen = [model.reduce(x) for x in model.frame.singletons]
-        return tuple(x for x in chosen if x.terms)
+        return _hypotheses(model)
     if isinstance(candidates, (str, Element)):
         candidates = [candidates]
     resolved: list[Element] = []
@@ -133,6 +134,15 @@ def _candidates(batch: MassBatch, candidates) -> tuple[Element, ...]:
     if not resolved:
         raise MeasureOptionError("decide needs at least one candidate")
     return tuple(resolved)
+
+
+@lru_cache(maxsize=64)
+def _hypotheses(model: Model) -> tuple[Element, ...]:
+    """The default candidates: the hypotheses that are not empty under the model, in frame order."""
+    if model.kind == "shafer":
+        return tuple(model.frame.singletons)
+    chosen = [model.reduce(x) for x in model.frame.singletons]
+    return tuple(x for x in chosen if x.terms)
 
 
 def _check_tolerance(tol: float) -> float:
@@ -222,7 +232,7 @@ def decide(m: Union[MassFunction, MassBatch], criterion: str = "betp", candidate
         raise UnknownMeasureError(f"unknown decision criterion {criterion!r}; known criteria: {', '.join(CRITERIA)}")
     tol = _check_tolerance(tol)
     batch, single = _as_batch(m, "the mass function")
-    queries = list(_candidates(batch, candidates))
+    queries = _candidates(batch, candidates)
     if key == "dsmp":
         scores = batch.dsmp(queries, epsilon=epsilon)
     else:
@@ -230,6 +240,7 @@ def decide(m: Union[MassFunction, MassBatch], criterion: str = "betp", candidate
     scores = np.asarray(scores, dtype=np.float64).reshape(len(batch), len(queries))
     value = scores.max(axis=1)
     tied = scores >= (value - tol)[:, None]
-    names = tuple(str(q) for q in queries)
+    frame = batch.model.frame
+    names = frame.hypotheses if queries is frame.singletons else tuple([str(q) for q in queries])
     result = DecisionBatch(names, scores, value, tied, np.argmax(tied, axis=1))
     return result[0] if single else result

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import re
 import unicodedata
+import weakref
 from collections.abc import Iterable, Iterator, Sequence
 from functools import lru_cache
 from typing import Union
@@ -33,6 +34,8 @@ __all__ = ["Frame", "Element", "reduce_terms", "term_key", "MAX_PROPOSITION_TERM
 MAX_PROPOSITION_TERMS = 100_000
 
 _OPERATOR_CHARS = set("()&|∩∪∅,")
+#: The live frames by their names (see Frame.__new__).
+_FRAMES: "weakref.WeakValueDictionary[tuple[str, ...], Frame]" = weakref.WeakValueDictionary()
 _RESERVED_NAMES = {"empty", "∅"}
 
 
@@ -151,9 +154,25 @@ class Frame:
     3
     """
 
-    __slots__ = ("_names", "_index", "_hash", "_bit")
+    __slots__ = ("_names", "_index", "_hash", "_bit", "_singletons", "__weakref__")
+
+    def __new__(cls, hypotheses: Sequence[str]) -> "Frame":
+        # Frames of the same names are one object while any is alive: elements, mass functions and the
+        # caches keyed by them then compare frames by identity instead of name by name (a comparison of
+        # n names per element made a look-up of n elements cost n²).
+        if cls is Frame and not isinstance(hypotheses, str):
+            try:
+                names = tuple(hypotheses)
+                known = _FRAMES.get(names)
+            except TypeError:                   # unhashable names: __init__ says what is wrong with them
+                known = None
+            if known is not None:
+                return known
+        return super().__new__(cls)
 
     def __init__(self, hypotheses: Sequence[str]) -> None:
+        if getattr(self, "_names", None) is not None:
+            return                              # the frame of these names, made before (see __new__)
         if isinstance(hypotheses, str):
             raise FrameError(
                 f"a frame takes a sequence of hypothesis names, not the single string {hypotheses!r}; "
@@ -184,6 +203,9 @@ class Frame:
         self._index = {name: i for i, name in enumerate(names)}
         self._bit = {name: 1 << i for i, name in enumerate(names)}
         self._hash = hash(("belief.Frame", names))
+        self._singletons = None
+        if type(self) is Frame:
+            _FRAMES[names] = self
 
     @classmethod
     def parse(cls, text: str) -> "Frame":
@@ -261,7 +283,11 @@ class Frame:
     @property
     def singletons(self) -> tuple["Element", ...]:
         """The elements θ_1, …, θ_n."""
-        return tuple(_make(self, (1 << i,)) for i in range(len(self._names)))
+        singletons = self._singletons
+        if singletons is None:
+            # Made once per frame: over thousands of hypotheses, each mask is an integer of thousands of bits.
+            singletons = self._singletons = tuple([_make(self, (bit,)) for bit in self._bit.values()])
+        return singletons
 
     def conjunction(self, names: Iterable[str]) -> "Element":
         """The intersection of the named hypotheses.

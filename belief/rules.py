@@ -26,6 +26,7 @@ The rules, their constants and :func:`inconsistency` can be imported from here a
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any, Union
 
 import belief.bayesian as bayesian
@@ -43,6 +44,7 @@ from belief.rules_pcr import pcr5, pcr6
 from belief.rules_r import EMPTY_MODES, R_MODES, check_r_options, inconsistency, r_rule
 from belief.rules_common import RESULT_TOLERANCE, Source, prepare_sources, renormalised
 from belief.rules_registry import ALIASES, RULES, RuleFunction, RuleInfo, register_rule
+from belief.singletons import SINGLETON_RULES, combine_singletons, singleton_sources
 from belief.rules_single import PCR_LOOP_TUPLES, SINGLE_CACHE_SIZE, SINGLE_LOOP_TUPLES, combine_single
 from belief.rules_tuples import LOOP_TUPLES, SMALL_PAIR, WIDE_LOOP_TUPLES
 
@@ -156,9 +158,10 @@ def combine(*sources: Source, rule: Union[str, RuleInfo] = "dempster", model: Mo
     info = RULES[key] if key is not None else get_rule(rule)     # an exact name skips the normalisation
     if engine == "auto" or engine == "general":
         if not options:
-            fused = combine_single(info, sources, model)
-            if fused is not None:
-                return fused
+            for family in SINGLE_FAMILIES:
+                fused = family(info, sources, model)
+                if fused is not None:
+                    return fused
     else:
         bayesian.check_engine(engine)
     unknown = set(options) - set(info.options)
@@ -179,6 +182,36 @@ def combine(*sources: Source, rule: Union[str, RuleInfo] = "dempster", model: Mo
             return fused
     result = renormalised(info.function(batches, fusion_model, **options), len(batches))
     return result[0] if single else result
+
+
+def _many_singletons(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> MassFunction | None:
+    """Mass functions of many single hypotheses under Shafer's model (:mod:`belief.singletons`), or None."""
+    kind = SINGLETON_RULES.get(info.name)
+    if kind is None or info.function is not _BUILT_IN.get(info.name):
+        return None
+    if len(sources) == 1 and isinstance(sources[0], (list, tuple)):
+        sources = sources[0]
+    read = singleton_sources(sources, model)
+    if read is None:
+        return None
+    fused = combine_singletons(kind, read, sources[0].model)
+    return None if fused is None else renormalised(fused, len(sources))
+
+
+#: The rules' own functions: a rule registered anew under a built-in name keeps its own kernel.
+_BUILT_IN = {info.name: info.function for info in RULES.values()}
+#: How single mass functions are combined, tried in this order; the first family that accepts the sources gives
+#: the final result (None: not for it).  Batches, and whatever no family takes, go on to the Bayesian closed forms
+#: (:mod:`belief.bayesian`, batches only) and then to the rule's own function over the compiled plans
+#: (:mod:`belief.rules_tuples`, :mod:`belief.plan`).
+#:
+#: ======================  ===========================================================  ======================
+#: family                  sources                                                      kernels
+#: ======================  ===========================================================  ======================
+#: many singletons         single hypotheses under Shafer's model, ≥ 4 096 tuples       :mod:`belief.singletons`
+#: unions of hypotheses    unions of exclusive hypotheses, frames of ≤ 16 hypotheses    :mod:`belief.rules_single`
+#: ======================  ===========================================================  ======================
+SINGLE_FAMILIES = (_many_singletons, combine_single)
 
 
 def sequential(*sources: Source, rule: Union[str, RuleInfo] = "pcr6", model: Model | None = None,

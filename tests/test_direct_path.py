@@ -69,7 +69,7 @@ def path(name: str):
     """
     with pytest.MonkeyPatch.context() as mp:
         if name == "plan":
-            mp.setattr(rules, "combine_single", lambda *args: None)
+            mp.setattr(rules, "SINGLE_FAMILIES", ())
             mp.setattr(tuples, "direct_path", lambda *args: None)
             mp.setattr(pcr_module, "direct_path", lambda *args: None)
         elif name in ("loop", "arrays", "single-loop", "single-arrays"):
@@ -83,7 +83,7 @@ def path(name: str):
                 mp.setattr(single, "PCR_LOOP_TUPLES", 10 ** 9 if big else 0)
                 mp.setattr(single, "_single_seen", lambda key, table: None)      # never a cached table
             else:
-                mp.setattr(rules, "combine_single", lambda *args: None)
+                mp.setattr(rules, "SINGLE_FAMILIES", ())
         else:
             assert name == "auto", name
         clear_caches()
