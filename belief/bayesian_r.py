@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from belief.batch import MassBatch, measure_plan
-from belief.bayesian_blocks import Blocks, Fusion, NoClosedForm, pick_per_row, row_offsets
-from belief.bayesian_fold import RECIPROCAL_FLOOR, Fold, RState, all_above, low_pairs, pair_sums
+from belief.bayesian_blocks import Blocks, Fusion, NoClosedForm, pick_per_row
+from belief.bayesian_fold import RECIPROCAL_FLOOR, Fold, RState, all_above
 from belief.bayesian_split import ExclusiveSplit
 from belief.frame import Element
 from belief.plan import weighted_sum
@@ -115,7 +115,6 @@ class RRuleFusion(Fusion):
         self.split = split
         self.sources = Blocks(values, split.size, len(split.free) if len(values) > 2 else 0, maps)
         self._maps = maps
-        self._three = len(values) == 3 and r_mode == "paper"     # :meth:`_run_three` applies
         self.rows = self.sources.rows
         self.s = len(values)
         self.r_mode = r_mode
@@ -168,9 +167,6 @@ class RRuleFusion(Fusion):
 
     def _run(self, positions: np.ndarray | None = None, full: bool = False) -> None:
         """One pass over the row blocks for the totals, and the selected or every free hypothesis."""
-        if not full and self._three:
-            self._run_three(positions)
-            return
         n, o = self.rows, len(self.split.free)
         totals = None if self._totals is not None else {k: np.empty(n) for k in ("s", "f", "u", "q", "v", "e")}
         selected = None if positions is None else {k: np.empty(n) for k in ("s", "u", "qj", "vj")}
@@ -193,190 +189,6 @@ class RRuleFusion(Fusion):
             self._selected = (positions.tobytes(), selected)
         if every is not None:
             self._full = every
-
-    def _run_three(self, positions: np.ndarray | None) -> None:
-        """:meth:`_run` for three cues and the R of W (10) as printed.
-
-        The two folds of :class:`Fold` in the case that nearly every row of a tracker meets:
-        m0 weighs every pair of a target with F in both folds (w_i + w_F above
-        :data:`RECIPROCAL_FLOOR`), and the selected target with every other one, so no
-        flagged class arises in the first fold, and the second one has no θ_S ∪ F to start
-        from.  The pairs of targets in the first fold may be as small as they come (particles
-        far from a target give it likelihoods of 1e-300, or 0): :func:`low_pairs` gives them
-        their exact shares.  Blocks of rows give only the sums over the targets that the
-        second fold needs; its per-row formulas (R of W (10), the totals and the selected
-        target) then run once on whole columns.  The other rows are folded again by the
-        general fold on their own, so that every row gets the arithmetic of :class:`Fold`.
-        """
-        n, union = self.rows, self.union
-        sums = {k: np.empty(n) for k in ("r1", "s0", "t1", "w1", "f1", "k1", "a2", "o2", "s1", "w2", "f2", "g2",
-                                         "t2", "f", "pf", "cf")}
-        if positions is not None:
-            sums.update({k: np.empty(n) for k in ("sj", "pj", "cj", "s1j", "w2j", "ch", "sh")})
-        slow = np.zeros(n, dtype=bool)
-        with np.errstate(all="ignore"):              # rows below the floor are redone by Fold
-            for rows in self.sources:
-                self._three_block(rows, None if positions is None else positions[rows], sums, slow)
-            totals, selected, flagged = self._three_rows(sums, positions)
-        self._flagged |= flagged
-        if slow.any():
-            redo = np.flatnonzero(slow)
-            sub = RRuleFusion([v if v.shape[0] != n else v[redo] for v in self.sources.values], self.split,
-                              self.r_mode, union, self._maps)
-            sub._three = False
-            sub._run(None if positions is None else positions[redo])
-            self._flagged[redo] = sub._flagged
-            for k, v in sub._totals.items():
-                totals[k][redo] = v
-            if selected is not None:
-                for k, v in sub._selected[1].items():
-                    selected[k][redo] = v
-        if self._totals is None:
-            self._totals = totals
-        if selected is not None:
-            self._selected = (positions.tobytes(), selected)
-
-    def _three_block(self, rows: slice, j: np.ndarray | None, sums: dict, slow: np.ndarray) -> None:
-        """The sums over the targets of one block of rows (:meth:`_run_three`), written to ``sums[k][rows]``."""
-        (s, f), (p, p_f), (c, c_f) = self._cues(rows)
-        put = {k: v[rows] for k, v in sums.items()}
-        reduce = np.add.reduce
-        put["f"][...], put["pf"][...], put["cf"][...] = f, p_f, c_f
-        # R of W (10) between the first two cues, and 1 − R.
-        r1, rho1 = _state_inconsistency(RState.bayesian(s, f), p, p_f, "paper", self.split)
-        put["r1"][...] = r1
-        near = np.zeros(r1.shape, dtype=bool)                # rows for the general fold
-        # First fold (its state is fresh): k_il of every pair to θ_i and θ_l as w_i : w_l, k_iF to
-        # θ_i and F as w_i : w_F, R·k_iF to θ_i ∪ F (or ∅).
-        d = w1 = s * p
-        w_f = f * p_f
-        inverse = w1 + w_f
-        _below(inverse, near)
-        np.divide(1.0, inverse, out=inverse)                 # 1 / (w_i + w_F)
-        k1 = s * p_f
-        k1 += f * p
-        ki = np.multiply(k1, inverse, out=inverse)          # k_iF / (w_i + w_F)
-        f1 = reduce(ki, 0, out=put["f1"])
-        to_singles = pair_sums(w1, s, p, ki)                # + Σ_{l≠i} k_il / (w_i + w_l)
-        f1 *= w_f
-        f1 *= rho1
-        f1 += w_f                                            # m′(F)
-        to_singles *= w1
-        low_pairs(w1, s, p, to_singles)                     # the pairs whose weights sum below the floor
-        to_singles *= rho1
-        s1 = np.add(to_singles, w1, out=to_singles)          # m′(θ_i)
-        s_total, t = reduce(s, 0, out=put["s0"]), reduce(p, 0, out=put["t1"])
-        reduce(w1, 0, out=put["w1"])
-        reduce(s1, 0, out=put["s1"])
-        reduce(c, 0, out=put["t2"])
-        k_total = np.multiply(s_total, p_f, out=put["k1"])  # Σ_i k_iF, a sum of non-negative terms
-        k_total += f * t
-        # Second fold: R needs Σ|m′(θ_i) − c_i|, m0 weighs w_i = (m′(θ_i) + m′(θ_i ∪ F)) c_i.
-        reduce(np.minimum(s1, c, out=d), 0, out=put["o2"])
-        np.subtract(s1, c, out=d)
-        reduce(np.abs(d, out=d), 0, out=put["a2"])
-        if self.union:
-            k1 *= r1                                         # m′(θ_i ∪ F)
-            w2 = np.add(k1, s1, out=k1)
-            u_total = r1 * k_total
-        else:
-            w2 = s1.copy()
-            u_total = 0.0
-        w2 *= c
-        if self.union and not w2.all():
-            # θ_l ∪ F against a target θ_i that m0 does not weigh takes SPEC A.4's fallback: the general fold.
-            near |= ((w2 == 0) & (c > 0)).any(axis=0) & (u_total > 0)
-        reduce(w2, 0, out=put["w2"])
-        w2_f = (f1 + u_total) * c_f
-        k2 = s1 * c_f
-        k2 += np.multiply(f1, c, out=d)
-        inverse = np.add(w2, w2_f, out=d)
-        _below(inverse, near)
-        np.divide(1.0, inverse, out=inverse)
-        np.einsum("ij,ij->j", k2, inverse, out=put["f2"])                 # Σ k_iF / (w_i + w_F)
-        np.einsum("ij,ij,ij->j", k2, w2, inverse, out=put["g2"])          # Σ k_iF w_i / (w_i + w_F)
-        if j is not None:
-            # θ_J against every other θ_l: Σ_l c_l h_l and Σ_l m′(θ_l) h_l, h_l = 1 / (w_J + w_l).
-            flat = j * j.size
-            flat += row_offsets(j.size, 1)
-            for key, values in (("sj", s), ("pj", p), ("cj", c), ("s1j", s1), ("w2j", w2)):
-                values.reshape(-1).take(flat, out=put[key], mode="clip")      # unbuffered: flat is valid
-            h = np.add(w2, put["w2j"], out=inverse)
-            _below(h, near)
-            np.divide(1.0, h, out=h)
-            h.reshape(-1)[flat] = 0.0
-            np.einsum("ij,ij->j", c, h, out=put["ch"])
-            np.einsum("ij,ij->j", s1, h, out=put["sh"])
-        slow[rows] = near
-
-    def _three_rows(self, sums: dict, positions: np.ndarray | None):
-        """The per-row formulas of the second fold (:meth:`Fold.totals`, :meth:`Fold.selected`) on whole columns.
-
-        Returns the totals, the selected parts (or None) and the flagged rows.
-        """
-        union = self.union
-        f0, p_f, c_f = sums["f"], sums["pf"], sums["cf"]
-        r1, k1, f1, t2 = sums["r1"], sums["k1"], sums["f1"], sums["t2"]
-        q1 = np.maximum(sums["s0"] * sums["t1"] - sums["w1"], 0.0)
-        q1 *= r1                                             # Σ m′(θ_S), every θ_S a pair
-        u1 = r1 * k1 if union else np.zeros(self.rows)       # Σ m′(θ_i ∪ F)
-        e1 = np.zeros(self.rows) if union else r1 * k1       # m′(∅)
-        # R of W (10) between m′ and the third cue: the cue has mass on singletons only.
-        value = sums["a2"] + np.abs(f1 - c_f)
-        value += q1
-        value += u1
-        value += e1
-        value *= 0.5
-        r, rho = paper_inconsistency(value, sums["o2"] + np.minimum(f1, c_f))
-        w_f = (f1 + u1) * c_f
-        half = 0.5 * (w_f > 0)
-        flagged = (q1 > 0) & (c_f > 0) & ~(w_f > 0)
-        # Σ_{i≠l} (m′(θ_i) + m′(θ_i ∪ F)) c_l: the consensus of targets and of θ_i ∪ F with other targets.
-        s1, w2 = sums["s1"], sums["w2"]
-        spread = np.maximum((s1 + u1) * t2 - w2, 0.0)
-        q_p_f = q1 * c_f
-        r_k = s1 * c_f                                       # Σ_i k_iF of the second fold
-        r_k += f1 * t2
-        r_k *= r
-        totals = {"s": w2 + rho * (spread + sums["g2"]),
-                  "f": w_f + rho * (sums["f2"] * w_f + half * q_p_f),
-                  "u": r_k if union else np.zeros(self.rows),
-                  "q": r * spread + q1 * t2,
-                  "v": ((r if union else 0.0) + rho * half) * q_p_f,
-                  "e": e1 * (t2 + c_f) if union else r_k + e1 * (t2 + c_f) + r * q_p_f}
-        if positions is None:
-            return totals, None, flagged
-        s_j, p_j, c_j = sums["sj"], sums["pj"], sums["cj"]
-        s1j, w_j = sums["s1j"], sums["w2j"]
-        q1j = sums["s0"] - s_j                              # Σ_{S∋J} m′(θ_S): the pairs θ_J ∩ θ_l
-        q1j *= p_j
-        q1j += s_j * (sums["t1"] - p_j)
-        q1j *= r1
-        if union:
-            u1j = s_j * p_f
-            u1j += f0 * p_j
-            u1j *= r1                                        # m′(θ_J ∪ F)
-        else:
-            u1j = np.zeros(self.rows)
-        k_f = s1j * c_f
-        k_f += f1 * c_j
-        except_p = t2 - c_j
-        except_u = u1 - u1j
-        to_single = s1j * sums["ch"]
-        to_single += c_j * sums["sh"]
-        to_single *= w_j
-        to_single += k_f * (w_j * (1.0 / (w_j + w_f)))
-        to_single += c_j * except_u                         # θ_l ∪ F against θ_J: all to θ_J
-        qj = s1 - s1j
-        qj *= c_j
-        qj += s1j * except_p
-        qj *= r
-        qj += q1j * t2 + np.maximum(q1 - q1j, 0.0) * c_j + r * (u1j * except_p + c_j * except_u)
-        to_single *= rho
-        to_single += w_j
-        selected = {"s": to_single, "u": r * k_f if union else np.zeros(self.rows), "qj": qj,
-                    "vj": ((r if union else 0.0) + rho * half) * c_f * q1j}
-        return totals, selected, flagged
 
     @property
     def general_rows(self) -> np.ndarray:
