@@ -636,15 +636,18 @@ class MassBatch:
         check_cardinality_range(self, "DSmP", epsilon)
         plan, single = self._plan(queries)
         m = self._normal_values("DSmP")
+        sparse = plan.sparse
+        if sparse is not None and sparse.complete:
+            result, undefined = sparse.dsmp(m, epsilon)
+            if undefined is None:
+                return self._shape(result, single)
+            raise _dsmp_undefined(epsilon, self.focal[undefined[1]])
         numerator = np.einsum("nz,zxa->nxa", m, plan.unit_in_meet) + epsilon * plan.meet_cardinality[None]
         denominator = weighted_sum(m, plan.unit_in_focal) + epsilon * plan.focal_cardinality[None]
         live = m > 0
         if (live & (denominator <= 0)).any():
             n, x = map(int, np.argwhere(live & (denominator <= 0))[0])
-            raise UndefinedTransformError(
-                f"DSmP with ε = {epsilon:g} is undefined: focal element {self.focal[x]} holds no mass "
-                "of DSm cardinality one; use ε > 0"
-            )
+            raise _dsmp_undefined(epsilon, self.focal[x])
         safe = np.where(live, denominator, 1.0)
         shares = np.where(live[:, :, None], numerator / safe[:, :, None], 0.0)
         return self._shape(np.einsum("nx,nxa->na", m, shares), single)
@@ -715,6 +718,11 @@ class MassBatch:
         check_refines(self.model, model)
         return MassBatch._trusted(model, self.focal, self.values)._regroup(
             [model.reduce(x) for x in self.focal])
+
+
+def _dsmp_undefined(epsilon: float, element: Element) -> UndefinedTransformError:
+    return UndefinedTransformError(f"DSmP with ε = {epsilon:g} is undefined: focal element {element} holds no mass "
+                                   "of DSm cardinality one; use ε > 0")
 
 
 def _check_alpha(alpha: float) -> float:

@@ -46,13 +46,52 @@ class Incidence:
         The number of hypotheses of the entry's focal element.
     queries : int
         Q.
+    complete : bool
+        Whether the queries name every hypothesis of every focal element (DSmP needs them all).
     """
 
-    def __init__(self, focal: np.ndarray, query: np.ndarray, size: np.ndarray, queries: int) -> None:
+    def __init__(self, focal: np.ndarray, query: np.ndarray, size: np.ndarray, queries: int,
+                 complete: bool = False) -> None:
         self.focal = focal
         self.query = query
         self.size = size
         self.queries = queries
+        self.complete = complete
+
+    def dsmp(self, values: np.ndarray, epsilon: float) -> tuple[np.ndarray, tuple[int, int] | None]:
+        """DSmP_ε of every query (Dezert & Smarandache 2008) from normalised masses, shape (N, Q); needs :attr:`complete`.
+
+        Under Shafer's model the focal elements of DSm cardinality one are the single hypotheses,
+        so for a query θ_i and a focal element X that holds it the share of m(X) is
+        (m(θ_i) + ε) / (Σ_{θ_j ∈ X} m(θ_j) + ε |X|), and nothing otherwise.  Returns the values and,
+        where a focal element with mass has a zero denominator (ε = 0 and none of its
+        hypotheses has mass of its own), its (row, focal element) instead of the values.
+        """
+        rows, width = values.shape[0], self.queries
+        singleton = self.size == 1.0
+        own = np.zeros((rows, width))
+        own[:, self.query[singleton]] = values[:, self.focal[singleton]]
+        count = values.shape[1]
+        sizes = _sizes(self, count)
+        out = np.zeros((rows, width))
+        step = max(1, _WEIGH_BLOCK // max(len(self.focal), 1))
+        for start in range(0, rows, step):
+            block = values[start:start + step]
+            b = block.shape[0]
+            held = own[start:start + step][:, self.query]                     # m(θ_i) of each entry, (b, E)
+            by_focal = (np.arange(b)[:, None] * count + self.focal[None, :]).ravel()
+            denominator = np.bincount(by_focal, weights=held.ravel(), minlength=b * count).reshape(b, count).astype(float)
+            denominator += epsilon * sizes[None, :]
+            live = block > 0
+            bad = live & (denominator <= 0)
+            if bad.any():
+                n, x = map(int, np.argwhere(bad)[0])
+                return out, (start + n, x)
+            safe = np.where(live, denominator, 1.0)
+            terms = block[:, self.focal] * (held + epsilon) / safe[:, self.focal]
+            target = (np.arange(b)[:, None] * width + self.query[None, :]).ravel()
+            out[start:start + step] = np.bincount(target, weights=terms.ravel(), minlength=b * width).reshape(b, width)
+        return out, None
 
     def weigh(self, values: np.ndarray, relation: str) -> np.ndarray:
         """Σ_X values[:, X] · table[X, q] of one relation's table, shape (N, Q).
@@ -97,6 +136,13 @@ class Incidence:
         return out
 
 
+def _sizes(table: Incidence, count: int) -> np.ndarray:
+    """|X| of each of the ``count`` focal elements (0 for ∅), from a complete incidence."""
+    sizes = np.zeros(count)
+    sizes[table.focal] = table.size
+    return sizes
+
+
 def incidence(focal: Sequence[Element], queries: Sequence[Element], model: Model | None = None) -> Incidence | None:
     """The :class:`Incidence` of focal elements and singleton queries, or None where it does not apply.
 
@@ -131,9 +177,11 @@ def incidence(focal: Sequence[Element], queries: Sequence[Element], model: Model
     focal_of: list[int] = []
     query_of: list[int] = []
     size_of: list[int] = []
+    terms_seen = 0
     for k, x in enumerate(focal):
         terms = x.terms
         size = len(terms)
+        terms_seen += size
         for t in terms:
             position = t.bit_length() - 1
             if masks[position] is not t and t.bit_count() != 1:
@@ -144,4 +192,4 @@ def incidence(focal: Sequence[Element], queries: Sequence[Element], model: Model
                 query_of.append(q)
                 size_of.append(size)
     return Incidence(np.array(focal_of, dtype=np.intp), np.array(query_of, dtype=np.intp),
-                     np.array(size_of, dtype=np.float64), len(queries))
+                     np.array(size_of, dtype=np.float64), len(queries), complete=len(focal_of) == terms_seen)

@@ -8,12 +8,12 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import belief.rules as rules
 import belief.singletons as singletons
-from belief import Frame, MassBatch, MassFunction, Model, TotalConflictError, combine
+from belief import Frame, MassBatch, MassFunction, Model, TotalConflictError, UndefinedTransformError, combine
 from belief.batch import measure_plan
 from belief.decisions import decide
 from belief.incidence import incidence
@@ -256,3 +256,52 @@ def test_frames_of_the_same_names_are_one_object():
     assert pickle.loads(pickle.dumps(a)) is a
     assert Frame(["q", "p"]) is not a
     assert MassFunction({"p": 1.0}, frame=["p", "q"]).frame is a
+
+
+@settings(max_examples=150, deadline=None)
+@given(union_batches(), st.sampled_from([0.0, 0.001, 0.5]))
+def test_dsmp_on_the_sparse_tables_equals_the_dense_definition(case, epsilon):
+    model, focal, _, values = case
+    assume(any(x.terms for x in focal))                         # only ∅: total conflict on both paths
+    queries = model.frame.singletons
+    values = values + 1e-3                                      # rows of positive masses summing to one
+    values /= values.sum(axis=1, keepdims=True)
+    batch = MassBatch(list(focal), values, model=model, subnormal=True)
+    table = incidence(focal, queries, model)
+    plan = measure_plan(model, focal, queries)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(type(plan), "sparse", property(lambda self: None))
+        try:
+            dense = batch.dsmp(queries, epsilon=epsilon)
+        except Exception as exc:                                # ε = 0 where DSmP is undefined
+            with pytest.raises(type(exc), match="undefined"):
+                table_dsmp(batch, table, epsilon)
+            return
+    np.testing.assert_allclose(table_dsmp(batch, table, epsilon), dense, rtol=1e-13, atol=1e-300)
+
+
+def table_dsmp(batch, table, epsilon):
+    keep = np.array([bool(x.terms) for x in batch.focal], dtype=float)
+    kept = batch.values * keep
+    result, undefined = table.dsmp(kept / kept.sum(axis=1, keepdims=True), epsilon)
+    if undefined is not None:
+        raise UndefinedTransformError("DSmP undefined")
+    return result
+
+
+def test_decide_by_dsmp_over_many_hypotheses_takes_the_sparse_tables():
+    names = [f"d{i}" for i in range(3000)]
+    model = Model.shafer(Frame(names))
+    rng = np.random.default_rng(11)
+    p = rng.random(3001)
+    p /= p.sum()
+    mapping = dict(zip(names, p[:3000].tolist()))
+    mapping["d0|d1"] = float(p[3000])
+    m = MassFunction(mapping, model=model)
+    batch = m.batch()
+    assert measure_plan(model, batch.focal, model.frame.singletons).sparse.complete
+    scores = batch.dsmp(model.frame.singletons, epsilon=0.0)[0]
+    d0 = p[0] + p[3000] * p[0] / (p[0] + p[1])
+    assert scores[0] == pytest.approx(d0, rel=1e-12)
+    assert scores[5] == pytest.approx(p[5], rel=1e-12)
+    assert decide(m, "dsmp", epsilon=0.0).elements == [names[int(np.argmax(scores))]]
