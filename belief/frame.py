@@ -373,6 +373,8 @@ class Frame:
 
     def term_name(self, term: int, style: str = "ascii") -> str:
         """Name of one conjunction mask, e.g. ``a&b``."""
+        if term.bit_count() == 1:               # one hypothesis: no walk over the bits of a wide mask
+            return self._names[term.bit_length() - 1]
         sep = "&" if style == "ascii" else "∩"
         return sep.join(self._names[i] for i in _bits(term))
 
