@@ -147,8 +147,8 @@ def _conflict(excl, totals, empties) -> np.ndarray:
 
     After source k a tuple is all-free (mass P_k), all on one exclusive θ_e (B_k(e)), or
     already conflicting (C_k); the next source keeps or breaks each state:
-    C_{k+1} = C_k · T + P_k · (E + z) + Σ_e B_k(e) · (O + z + E − m(θ_e)), where T, O, E
-    and z are the next source's total, free, exclusive and ∅ masses.
+    C_{k+1} = C_k · T + P_k · (E + z) + Σ_e B_k(e) · (O + z + Σ_{e′≠e} m(θ_e′)), where T, O,
+    E and z are the next source's total, free, exclusive and ∅ masses.
     """
     free_so_far = totals[0]
     same = excl[0]
@@ -157,9 +157,23 @@ def _conflict(excl, totals, empties) -> np.ndarray:
         e_total = e.sum(axis=0)
         outside = e_total if z is None else e_total + z          # what breaks an all-free tuple
         free_or_empty = total if z is None else total + z
-        others = np.maximum(e_total - e, 0.0)                    # the other exclusive hypotheses
+        others = _others(e)                                      # the other exclusive hypotheses
         conflict = (conflict * (free_or_empty + e_total) + free_so_far * outside
                     + (same * (free_or_empty + others)).sum(axis=0))
         free_so_far = free_so_far * total
         same = same * e
     return conflict
+
+
+def _others(exclusive: np.ndarray) -> np.ndarray:
+    """Σ_{e′ ≠ e} m(θ_e′) for every row e of a (|E|, B) block: the masses before e plus those after it.
+
+    Two cumulative sums of non-negative masses, never Σ_E − m(θ_e): next to an exclusive
+    hypothesis of mass 1 the difference would be 1 − 1 = 0 and lose the others' 1e-160
+    (their conflict with a source on θ_e), which Yager's rule then leaves off Θ.
+    """
+    out = np.zeros_like(exclusive)
+    if exclusive.shape[0] > 1:
+        np.cumsum(exclusive[:-1], axis=0, out=out[1:])
+        out[:-1] += np.cumsum(exclusive[:0:-1], axis=0)[::-1]
+    return out

@@ -2,7 +2,9 @@
 
 ``default`` is used for local runs.  ``ci`` is loaded when the environment variable
 ``CI`` is set to a true value (``CI=true`` on the continuous-integration runner); it is
-derandomised so that a CI run is reproducible, and keeps no example database.
+derandomised so that a CI run is reproducible, and keeps no example database.  ``thorough`` is for
+a long run by hand (``pytest --hypothesis-profile=thorough tests/test_engine_equality.py``): twenty
+times the examples of ``default``.
 """
 
 import os
@@ -21,6 +23,13 @@ settings.register_profile(
     derandomize=True,
     database=None,
     print_blob=True,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+
+settings.register_profile(
+    "thorough",
+    max_examples=2000,
+    deadline=None,
     suppress_health_check=[HealthCheck.too_slow],
 )
 

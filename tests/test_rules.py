@@ -1,8 +1,8 @@
-"""Combination rules: a slow literal reference, batches, literature values, errors and aliases."""
+"""Combination rules against the slow literal reference (tests/reference_rules.py), batches, literature values,
+errors and aliases."""
 
 import math
 from fractions import Fraction
-from itertools import product
 
 import numpy as np
 import pytest
@@ -26,6 +26,15 @@ from belief import (
     sequential,
 )
 from belief.rules import get_rule, inconsistency, rule_names
+from tests.reference_rules import (
+    RefModelError,
+    RefTotalConflict,
+    add,
+    ref_combine,
+    ref_r_fold,
+    ref_sources,
+    regions_result,
+)
 from tests.strategies import (
     FusionCase,
     ModelCase,
@@ -33,228 +42,14 @@ from tests.strategies import (
     fusion_cases,
     mass_cases,
     mass_cases_under,
-    minimal_regions,
     tracking_allowed,
     weight_lists,
 )
 
-# -- slow, literal reference implementation ---------------------------------------------------------
-#
-# An element is its set of Venn regions (tests/strategies.py); under the fusion model it keeps the
-# regions that model allows, and the empty set of regions is ∅.  A source is a list of
-# (regions under the source model, exact mass) pairs.  Every rule visits every tuple of focal
-# elements (itertools.product) and adds Fractions, straight from the definitions:
-#
-#   conjunctive / DSmC   Π m_i(X_i) → X_1 ∩ … ∩ X_s (∅ kept)              SPEC A.3, W (2)
-#   Dempster             conjunctive, ∅ removed, rescaled by 1 - m(∅)        SPEC A.3
-#   disjunctive          Π m_i(X_i) → X_1 ∪ … ∪ X_s
-#   Yager                conjunctive, m(∅) added to total ignorance
-#   Dubois–Prade         → ∩ if non-empty, else → ∪ (which may be ∅ under dynamic fusion)
-#   DSmH                 → ∩ if non-empty (S1), else → ∪ if non-empty (S3), else → u(X_1) ∪ … ∪ u(X_s)
-#                        or total ignorance if that is empty too (S2); u(X) = the union of the
-#                        hypotheses that appear in X as elicited
-#   PCR5                 a conflicting product goes to the distinct elements Y of the tuple in
-#                        proportion to P_Y = Π_{i: X_i = Y} m_i(Y)
-#   PCR6                 a conflicting product goes to each X_i in proportion to m_i(X_i)
-#   R-rule               SPEC A.4, normative algorithm combine_r, folded over the sources in order
-
-
-def popcount(mask: int) -> int:
-    return bin(mask).count("1")
-
-
-def ref_sources(fc: FusionCase) -> list[list[tuple[frozenset, Fraction]]]:
-    """Each source as (regions under the source model, mass), entries of one element merged.
-
-    The masses are the floats that the sources hold (entries of one element added by
-    ``math.fsum``, as a mass function merges them), taken exactly: the R-rule's paper R is
-    the square root of a distance, so two sources that are equal as fractions but differ by
-    one rounding in a merged mass have an R of about 1e-8, not 0.
-    """
-    out = []
-    for entries in fc.sources:
-        merged: dict[frozenset, list[float]] = {}
-        for element, mass in entries:
-            merged.setdefault(fc.source.regions(element), []).append(float(mass))
-        out.append([(key, Fraction(math.fsum(values))) for key, values in merged.items()])
-    return out
-
-
-def u_regions(source_regions: frozenset, allowed: frozenset) -> frozenset:
-    """u(X) under the fusion model: X's minimal regions name the hypotheses that appear in X."""
-    mask = 0
-    for region in minimal_regions(source_regions):
-        mask |= region
-    return frozenset(s for s in allowed if s & mask)
-
-
-def add(table: dict, key: frozenset, value) -> None:
-    table[key] = table.get(key, Fraction(0)) + value
-
-
-def ref_tuples(sources):
-    for combo in product(*sources):
-        elements = [x for x, _ in combo]
-        mass = Fraction(1)
-        for _, v in combo:
-            mass *= v
-        yield elements, [v for _, v in combo], mass
-
-
-class RefModelError(Exception):
-    """The reference's counterpart of ModelError (an element vanishes under the fusion model)."""
-
-
-class RefTotalConflict(Exception):
-    """The reference's counterpart of TotalConflictError."""
-
-
-def ref_combine(rule: str, sources, allowed: frozenset, r_mode="paper", empty_mode="union") -> dict:
-    """Reference result of a rule as {regions under the fusion model: Fraction}."""
-    total = frozenset(allowed)
-    fused = [[(x & allowed, v) for x, v in s] for s in sources]
-    out: dict[frozenset, Fraction] = {}
-    if rule in ("pcr5", "pcr6", "r_rule") and any(not x for s in fused for x, _ in s):
-        raise RefModelError
-    if rule == "r_rule":
-        return ref_r_fold(fused, allowed, r_mode, empty_mode)
-    for (elements, masses, p), (originals, _, _) in zip(ref_tuples(fused), ref_tuples(sources)):
-        meet = frozenset.intersection(*elements)
-        join = frozenset.union(*elements)
-        if rule in ("conjunctive", "dsmc", "dempster", "yager"):
-            add(out, meet, p)
-        elif rule == "disjunctive":
-            add(out, join, p)
-        elif rule == "dubois_prade":
-            add(out, meet if meet else join, p)
-        elif rule == "dsmh":
-            if meet:
-                add(out, meet, p)
-            elif join:
-                add(out, join, p)
-            else:
-                u = frozenset().union(*(u_regions(x, allowed) for x in originals))
-                add(out, u if u else total, p)
-        elif rule in ("pcr5", "pcr6"):
-            if meet:
-                add(out, meet, p)
-                continue
-            weights: dict[frozenset, Fraction] = {}
-            if rule == "pcr6":
-                for x, v in zip(elements, masses):
-                    add(weights, x, v)
-                denominator = sum(masses)
-                for x, w in weights.items():
-                    add(out, x, p * w / denominator)
-            else:
-                for x in set(elements):
-                    weight = Fraction(1)
-                    for y, v in zip(elements, masses):
-                        if y == x:
-                            weight *= v
-                    weights[x] = weight
-                denominator = sum(weights.values())
-                for x, w in weights.items():
-                    add(out, x, p * w / denominator)
-        else:  # pragma: no cover
-            raise AssertionError(rule)
-    if rule == "dempster":
-        out.pop(frozenset(), None)
-        kept = sum(out.values(), Fraction(0))     # 1 - m(∅), when the sources sum to one exactly
-        if not kept:
-            raise RefTotalConflict
-        out = {x: v / kept for x, v in out.items()}
-    if rule == "yager":
-        conflict = out.pop(frozenset(), Fraction(0))
-        add(out, total, conflict)
-    return {x: v for x, v in out.items() if v}
-
-
-def shafer_projection(x: frozenset) -> frozenset:
-    """π0(X): the singleton regions of X (SPEC A.2)."""
-    return frozenset(r for r in x if popcount(r) == 1)
-
-
-def ref_inconsistency(m1: dict, m2: dict, r_mode: str) -> float:
-    """R of W (10) over the focal elements of either source (SPEC A.4)."""
-    keys = list(set(m1) | set(m2))
-    delta = [m1.get(k, Fraction(0)) - m2.get(k, Fraction(0)) for k in keys]
-    if r_mode == "paper":
-        value = sum(abs(d) for d in delta) / 2
-    elif r_mode == "euclid":
-        value = sum(d * d for d in delta) / 2
-    else:
-        value = Fraction(0)
-        for a, da in zip(keys, delta):
-            for b, db in zip(keys, delta):
-                union = len(a | b)
-                value += da * db * (Fraction(len(a & b), union) if union else 0)
-        value /= 2
-    return math.sqrt(float(value))
-
-
-def ref_r_pair(m1: dict, m2: dict, allowed: frozenset, r_mode: str, empty_mode: str) -> dict:
-    """combine_r(m1, m2) of SPEC A.4, steps 1-4, on region sets."""
-    r = Fraction(ref_inconsistency(m1, m2, r_mode))
-    m0: dict[frozenset, Fraction] = {}          # Dempster on the Shafer projections, unnormalised
-    for (x, v), (y, w) in product(m1.items(), m2.items()):
-        c = shafer_projection(x) & shafer_projection(y)
-        if c:
-            add(m0, c, v * w)
-    out: dict[frozenset, Fraction] = {}
-    conflicts: dict[frozenset, Fraction] = {}   # k_{X,Y}, W (11)
-    pairs: dict[frozenset, tuple] = {}
-    for (x, v), (y, w) in product(m1.items(), m2.items()):
-        p, z = v * w, x & y
-        px, py = shafer_projection(x), shafer_projection(y)
-        if not x or not y:
-            add(out, frozenset(), p)              # ∅ carried by a running result stays on ∅
-        elif not z or (not (x <= y or y <= x) and px and py and not px & py):
-            key = frozenset((x, y))
-            add(conflicts, key, p)
-            pairs[key] = (x, y)
-        else:
-            add(out, z, p)                        # consensus
-    for key, k in conflicts.items():
-        a, b = pairs[key]
-        union, meet = a | b, a & b
-        kept = meet if meet else (union if empty_mode == "union" else frozenset())
-        add(out, kept, r * k)                                             # W (14)
-        targets = (a, b, union)
-        weights = [m0.get(shafer_projection(t), Fraction(0)) if shafer_projection(t) else Fraction(0)
-                   for t in targets]
-        if not sum(weights):
-            weights = [m1.get(t, Fraction(0)) + m2.get(t, Fraction(0)) for t in targets]
-        if not sum(weights):
-            weights = [Fraction(0), Fraction(0), Fraction(1)]
-        for t, wt in zip(targets, weights):
-            add(out, t, (1 - r) * k * wt / sum(weights))                  # W (12), (12'), (13)
-    return {x: v for x, v in out.items() if v}
-
-
-def ref_r_fold(fused, allowed, r_mode, empty_mode) -> dict:
-    def as_dict(source):
-        d: dict[frozenset, Fraction] = {}
-        for x, v in source:
-            add(d, x, v)
-        return d
-
-    result = as_dict(fused[0])
-    for source in fused[1:]:
-        result = ref_r_pair(result, as_dict(source), allowed, r_mode, empty_mode)
-    return result
+# The slow, literal reference of every rule, in exact arithmetic, is tests/reference_rules.py.
 
 
 # -- comparison helpers -----------------------------------------------------------------------------------
-
-
-def regions_result(m: MassFunction, case: ModelCase) -> dict:
-    out: dict[frozenset, float] = {}
-    for e, v in m.items():
-        key = case.regions(e)
-        assert key not in out, f"two result elements denote the regions {sorted(key)}"
-        out[key] = v
-    return out
 
 
 def assert_matches(actual: dict, expected: dict, tol: float = 1e-12) -> None:
