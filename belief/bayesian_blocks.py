@@ -281,3 +281,17 @@ def pick_per_row(values: np.ndarray, positions: np.ndarray) -> np.ndarray:
         flat += row_offsets(n, 1)
         return values.reshape(-1).take(flat)
     return values[positions, np.arange(n)]
+
+
+def sums_of_the_others(values: np.ndarray) -> np.ndarray:
+    """Σ_{j ≠ i} values[j] for every i along the first axis: the values before i plus those after it.
+
+    Two cumulative sums of non-negative masses, never Σ_E − m(θ_e): next to an values
+    hypothesis of mass 1 the difference would be 1 − 1 = 0 and lose the others' 1e-160
+    (their conflict with a source on θ_e), which Yager's rule then leaves off Θ.
+    """
+    out = np.zeros_like(values)
+    if values.shape[0] > 1:
+        np.cumsum(values[:-1], axis=0, out=out[1:])
+        out[:-1] += np.cumsum(values[:0:-1], axis=0)[::-1]
+    return out

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from belief.bayesian_blocks import Blocks, Fusion, block_sources, first_pick, product_of
+from belief.bayesian_blocks import Blocks, Fusion, block_sources, first_pick, product_of, sums_of_the_others
 from belief.bayesian_split import ExclusiveSplit
 
 #: Rows per block of a fusion that reads the sources column by column (a column of a block stays
@@ -157,23 +157,9 @@ def _conflict(excl, totals, empties) -> np.ndarray:
         e_total = e.sum(axis=0)
         outside = e_total if z is None else e_total + z          # what breaks an all-free tuple
         free_or_empty = total if z is None else total + z
-        others = _others(e)                                      # the other exclusive hypotheses
+        others = sums_of_the_others(e)                                      # the other exclusive hypotheses
         conflict = (conflict * (free_or_empty + e_total) + free_so_far * outside
                     + (same * (free_or_empty + others)).sum(axis=0))
         free_so_far = free_so_far * total
         same = same * e
     return conflict
-
-
-def _others(exclusive: np.ndarray) -> np.ndarray:
-    """Σ_{e′ ≠ e} m(θ_e′) for every row e of a (|E|, B) block: the masses before e plus those after it.
-
-    Two cumulative sums of non-negative masses, never Σ_E − m(θ_e): next to an exclusive
-    hypothesis of mass 1 the difference would be 1 − 1 = 0 and lose the others' 1e-160
-    (their conflict with a source on θ_e), which Yager's rule then leaves off Θ.
-    """
-    out = np.zeros_like(exclusive)
-    if exclusive.shape[0] > 1:
-        np.cumsum(exclusive[:-1], axis=0, out=out[1:])
-        out[:-1] += np.cumsum(exclusive[:0:-1], axis=0)[::-1]
-    return out

@@ -186,8 +186,8 @@ def combine(*sources: Source, rule: Union[str, RuleInfo] = "dempster", model: Mo
 
 def _many_singletons(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> MassFunction | None:
     """Mass functions of many single hypotheses under Shafer's model (:mod:`belief.singletons`), or None."""
-    kind = SINGLETON_RULES.get(info.name)
-    if kind is None or info.function is not _BUILT_IN.get(info.name):
+    kind = SINGLETON_RULES.get(info.function)
+    if kind is None:
         return None
     if len(sources) == 1 and isinstance(sources[0], (list, tuple)):
         sources = sources[0]
@@ -198,8 +198,6 @@ def _many_singletons(info: RuleInfo, sources: Sequence[Source], model: Model | N
     return None if fused is None else renormalised(fused, len(sources))
 
 
-#: The rules' own functions: a rule registered anew under a built-in name keeps its own kernel.
-_BUILT_IN = {info.name: info.function for info in RULES.values()}
 #: How single mass functions are combined, tried in this order; the first family that accepts the sources gives
 #: the final result (None: not for it).  Batches, and whatever no family takes, go on to the Bayesian closed forms
 #: (:mod:`belief.bayesian`, batches only) and then to the rule's own function over the compiled plans

@@ -35,21 +35,22 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from belief.bayesian_blocks import sums_of_the_others
 from belief.mass import MassFunction
 from belief.model import Model
+from belief.rules_classic import WIDE_SCALE, conjunctive, dempster, dsmc, yager
+from belief.rules_pcr import pcr5, pcr6
 
 __all__ = ["SINGLETON_KERNEL_TUPLES", "SINGLETON_RULES", "singleton_sources", "combine_singletons"]
 
 #: Sources with at least this many tuples of focal elements (n_1 · n_2 for two) come here; fewer are left to the
 #: direct path, whose Python loops over a handful of floats cost less than this kernel's numpy calls.
 SINGLETON_KERNEL_TUPLES = 4096
-#: The rules this family evaluates, by registered name, and how: ∩ kind folded, or PCR of two sources.
-SINGLETON_RULES = {"conjunctive": "meet", "dsmc": "meet", "dempster": "dempster", "yager": "yager",
-                   "pcr5": "pcr", "pcr6": "pcr"}
+#: The built-in rules this family evaluates, by function (a rule registered anew under a name keeps its own), and
+#: how: ∩ kind folded, or PCR of two sources.
+SINGLETON_RULES = {conjunctive: "meet", dsmc: "meet", dempster: "dempster", yager: "yager", pcr5: "pcr", pcr6: "pcr"}
 #: Entries of the pair table of PCR at a time: a block of (rows × n) shares (2 MB) stays in the processor's cache.
 PCR_BLOCK_ENTRIES = 1 << 18
-#: Dempster's scale below which the products may have underflowed: the general path then decides.
-_SMALLEST_SCALE = 2.0 ** -40
 
 
 class SingletonSource:
@@ -127,19 +128,10 @@ def _dense(sources: Sequence[SingletonSource], n: int) -> tuple[np.ndarray, list
     return used, out
 
 
-def _others(b: np.ndarray, b_empty: float) -> np.ndarray:
-    """Σ_{j≠i} b_j + b∅ for every i, as sums of non-negative terms (masses before i, after i, and ∅)."""
-    before = np.zeros_like(b)
-    np.cumsum(b[:-1], out=before[1:])
-    after = np.zeros_like(b)
-    np.cumsum(b[:0:-1], out=after[-2::-1])
-    return before + after + b_empty
-
-
 def _meet(a: np.ndarray, a_empty: float, b: np.ndarray, b_empty: float) -> tuple[np.ndarray, float]:
     """Conjunctive step (W (2)): the products on each hypothesis and the mass on ∅."""
     total_b = b_empty + float(b.sum())
-    conflict = a_empty * total_b + float(np.dot(a, _others(b, b_empty)))
+    conflict = a_empty * total_b + float(np.dot(a, sums_of_the_others(b) + b_empty))
     return a * b, conflict
 
 
@@ -231,7 +223,7 @@ def combine_singletons(kind: str, sources: Sequence[SingletonSource], model: Mod
     if kind == "dempster":
         kept = products[products > 0]
         scale = kept.sum()
-        if not scale > _SMALLEST_SCALE:
+        if not scale > WIDE_SCALE:          # underflow or total conflict: the general path decides
             return None
         return _singleton_result(model, used, products / scale, None)
     if kind == "yager":

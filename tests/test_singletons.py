@@ -124,7 +124,7 @@ def test_the_kernel_is_taken_and_gives_the_plans_masses(rule):
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(rules, "combine_singletons", lambda *a: calls.append(a[0]) or original(*a))
         fast = combine(*sources, rule=rule)
-    assert calls == [singletons.SINGLETON_RULES[rule]]
+    assert calls == [singletons.SINGLETON_RULES[rules.get_rule(rule).function]]
     general = combine(*(m.batch() for m in sources), rule=rule, engine="general")[0]
     assert fast.focal == general.focal
     np.testing.assert_allclose(fast.values, general.values, rtol=1e-13, atol=0)
@@ -227,15 +227,21 @@ def test_sparse_tables_do_not_apply_to_intersections_repeated_queries_or_other_m
     assert incidence((frame["a"],), (frame["a"],), Model.free(frame)) is None
 
 
-def test_measures_of_many_hypotheses_take_the_sparse_tables_and_agree_with_the_definition():
-    names = [f"s{i}" for i in range(400)]
+def bayesian_and_one_union(prefix: str, n: int, union: int, seed: int) -> tuple[Model, list[str], np.ndarray,
+                                                                                 MassFunction]:
+    """n single hypotheses and the union of the first ``union`` of them, random masses (the last one the union's)."""
+    names = [f"{prefix}{i}" for i in range(n)]
     model = Model.shafer(Frame(names))
-    rng = np.random.default_rng(5)
-    masses = rng.random(401)
+    masses = np.random.default_rng(seed).random(n + 1)
     masses /= masses.sum()
-    mapping = dict(zip(names, masses[:400].tolist()))
-    mapping["s0|s1|s2|s3"] = float(masses[400])
-    batch = MassFunction(mapping, model=model).batch()
+    mapping = dict(zip(names, masses[:n].tolist()))
+    mapping["|".join(names[:union])] = float(masses[n])
+    return model, names, masses, MassFunction(mapping, model=model)
+
+
+def test_measures_of_many_hypotheses_take_the_sparse_tables_and_agree_with_the_definition():
+    model, names, masses, m = bayesian_and_one_union("s", 400, 4, seed=5)
+    batch = m.batch()
     plan = measure_plan(model, batch.focal, model.frame.singletons)
     assert plan.sparse is not None
     pls = batch.pls(model.frame.singletons)[0]
@@ -290,14 +296,7 @@ def table_dsmp(batch, table, epsilon):
 
 
 def test_decide_by_dsmp_over_many_hypotheses_takes_the_sparse_tables():
-    names = [f"d{i}" for i in range(3000)]
-    model = Model.shafer(Frame(names))
-    rng = np.random.default_rng(11)
-    p = rng.random(3001)
-    p /= p.sum()
-    mapping = dict(zip(names, p[:3000].tolist()))
-    mapping["d0|d1"] = float(p[3000])
-    m = MassFunction(mapping, model=model)
+    model, names, p, m = bayesian_and_one_union("d", 3000, 2, seed=11)
     batch = m.batch()
     assert measure_plan(model, batch.focal, model.frame.singletons).sparse.complete
     scores = batch.dsmp(model.frame.singletons, epsilon=0.0)[0]
@@ -305,3 +304,17 @@ def test_decide_by_dsmp_over_many_hypotheses_takes_the_sparse_tables():
     assert scores[0] == pytest.approx(d0, rel=1e-12)
     assert scores[5] == pytest.approx(p[5], rel=1e-12)
     assert decide(m, "dsmp", epsilon=0.0).elements == [names[int(np.argmax(scores))]]
+
+
+def test_a_relation_without_a_sparse_table_is_refused_by_name():
+    frame = Frame(["a", "b"])
+    table = incidence((frame["a"],), (frame["a"],), Model.shafer(frame))
+    with pytest.raises(ValueError, match="no sparse table for the relation 'unit_in_meet'"):
+        table.weigh(np.array([[1.0]]), "unit_in_meet")
+
+
+def test_dsmp_names_the_focal_element_where_it_is_undefined():
+    model, names, _, _ = bayesian_and_one_union("e", 300, 2, seed=1)
+    m = MassFunction({"e0|e1": 0.5, **{name: 0.5 / 298 for name in names[2:]}}, model=model)
+    with pytest.raises(UndefinedTransformError, match=r"focal element e0\|e1 holds no mass of DSm cardinality one"):
+        m.batch().dsmp(model.frame.singletons, epsilon=0.0)
