@@ -18,6 +18,7 @@ from belief.batch import SUM_TOLERANCE, MassBatch, check_cardinality_range, chec
 from belief.errors import FormatError, InvalidMassError
 from belief.frame import Element, Frame, make_elements
 from belief.model import Model, _show
+from belief.masks import union_key
 from belief.plan import RANK_TABLE_WIDTH, union_elements, union_ranks
 from belief.textfiles import load_json
 
@@ -95,18 +96,25 @@ class MassFunction(_MassSlots):
             # can be checked item by item: a call on new inputs pays for every object it
             # touches and every builtin it runs, more than for the arithmetic.  Anything
             # else (intersections, element keys, "empty", a name twice, a zero or a bad
-            # mass) goes to the slower constructors below, which raise the errors.
-            get = context[0]
+            # mass) goes to the slower constructors below, which raise the errors.  The masks
+            # of propositions read before are remembered by their text (a bounded dict).
+            get, _, _, parsed = context
+            known = parsed.get
             masks = []
             try:
                 for key, value in masses.items():
                     if type(value) is not float or not value > 0.0:
                         break
-                    parts = key.split("|")
-                    mask = sum(map(get, parts))
-                    # Without carries (each name once) the mask has a bit per name.
-                    if mask.bit_count() != len(parts):
-                        break
+                    mask = known(key)
+                    if mask is None:
+                        parts = key.split("|")
+                        mask = sum(map(get, parts))
+                        # Without carries (each name once) the mask has a bit per name.
+                        if mask.bit_count() != len(parts):
+                            break
+                        if len(parsed) >= PARSE_CACHE_SIZE:
+                            parsed.clear()
+                        parsed[key] = mask
                     masks.append(mask)
                 else:
                     if masks and len(set(masks)) == len(masks):
@@ -119,7 +127,7 @@ class MassFunction(_MassSlots):
                             else:
                                 self._set_unions(model, masks, values)
                             return
-            except (KeyError, AttributeError):
+            except (KeyError, AttributeError, TypeError):
                 pass
             if _spaced_unions(self, masses, model, context[1]):
                 return
@@ -272,9 +280,11 @@ class MassFunction(_MassSlots):
         return obj
 
     def _settle(self) -> None:
-        """Put loose masks and floats in canonical order (:func:`~belief.plan.union_ranks`)."""
-        rank = union_ranks(len(self.model.frame))[2]
-        items = sorted(zip([rank[m] for m in self._masks], self._masks, self._floats))
+        """Put loose masks and floats in canonical order (:func:`~belief.plan.union_ranks`, or its key if wider)."""
+        n = len(self.model.frame)
+        rank = union_ranks(n)[2] if n <= RANK_TABLE_WIDTH else list(map(union_key(n), self._masks))
+        items = sorted(zip([rank[m] for m in self._masks] if n <= RANK_TABLE_WIDTH else rank, self._masks,
+                           self._floats))
         object.__setattr__(self, "_masks", tuple([m for _, m, _ in items]))
         object.__setattr__(self, "_floats", tuple([v for _, _, v in items]))
         object.__setattr__(self, "_loose", False)
@@ -684,9 +694,15 @@ def _union_context(model: Model) -> tuple | bool:
     if n > RANK_TABLE_WIDTH or any(f & (f - 1) == 0 for f in model.forbidden):
         context = False
     else:
-        context = (frame._bit.__getitem__, frame._bit, union_ranks(n)[2])
+        # The bit of each name, the rank table, and the propositions read so far, by their text.
+        context = (frame._bit.__getitem__, frame._bit, union_ranks(n)[2], {})
     model._unions = context
     return context
+
+
+#: How many propositions a model remembers the hypothesis masks of (``MassFunction(...)`` reads the others); then it
+#: starts over.
+PARSE_CACHE_SIZE = 4096
 
 
 def _plain_key(item: tuple[tuple[int, ...], float]) -> tuple:

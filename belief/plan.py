@@ -14,8 +14,9 @@ Compiling pays when the same focal elements come back (a tracker, a repeated fus
 combination of focal elements seen for the first time is evaluated directly instead
 (:mod:`belief.rules`), on integer codes of its focal elements (:func:`encode`): there ∩ and
 ∪ are ``&`` and ``|``, so the tuples' results cost a few numpy operations (or a loop over
-a few dozen tuples) and no element is built per tuple.  :func:`plan_lookup` and
-:func:`sighted` tell which way a call goes.
+a few dozen tuples) and no element is built per tuple; only the distinct results become
+elements.  Hypothesis masks wider than 64 bits are rows of 64-bit words (:mod:`belief.masks`).
+:func:`plan_lookup` and :func:`sighted` tell which way a call goes.
 """
 
 from __future__ import annotations
@@ -30,12 +31,13 @@ import numpy as np
 
 from belief.errors import CombinationTooLargeError
 from belief.frame import Element, Frame, make_elements
+from belief.masks import canonical_order, from_words, to_words, tuple_groups, union_terms, word_count
 from belief.model import Model
 
 __all__ = ["TuplePlan", "Scatter", "FocalKey", "tuple_plan", "MAX_TUPLES", "MAX_WORK", "MAX_BYTES",
            "MAX_ELEMENT_TUPLES", "JobCost", "joint_cost", "check_joint", "FoldBudget", "coded_fast", "Encoding",
-           "encode", "coded_table", "canonical_codes", "plan_lookup", "sighted", "mask_terms", "union_ranks",
-           "union_elements", "RANK_TABLE_WIDTH", "weighted_sum"]
+           "encode", "coded_table", "canonical_codes", "canonical_groups", "plan_lookup", "sighted", "mask_terms",
+           "union_ranks", "union_elements", "RANK_TABLE_WIDTH", "weighted_sum", "exclusive_hypotheses"]
 
 # The limits below are read when a combination starts, so a caller may raise them
 # (``belief.plan.MAX_TUPLES = ...``).  The defaults keep an accepted job under about ten
@@ -47,7 +49,8 @@ MAX_TUPLES = 4_000_000
 MAX_WORK = 200_000_000
 #: The index tables of a joint combination take at most about this many bytes.
 MAX_BYTES = 768 * 2**20
-#: Models whose focal elements have no codes of 64 bits combine element by element: at most this many tuples.
+#: Focal elements without codes that numpy combines (:func:`coded_fast`) go element by element, at most this many
+#: tuples of them.
 MAX_ELEMENT_TUPLES = 25_000
 #: Rows are processed in chunks of about this many (row × tuple) entries, to bound memory.
 CHUNK_ENTRIES = 1 << 18
@@ -401,7 +404,7 @@ def encode(model: Model, projected: Sequence[Sequence[Element]]) -> Encoding | N
                 used |= t
                 if single and t & (t - 1):
                     single = False
-    if single and _exclusive(model, used):
+    if single and exclusive_hypotheses(model, used):
         return Encoding("exclusive", tuple(tuple([sum(x.terms) for x in elements]) for elements in projected),
                         len(model.frame))
     table = _region_table(model)
@@ -431,10 +434,24 @@ def encode(model: Model, projected: Sequence[Sequence[Element]]) -> Encoding | N
 
 
 @lru_cache(maxsize=1024)
-def _exclusive(model: Model, used: int) -> bool:
-    """Whether the model forbids every pair of the hypotheses in ``used``."""
-    bits = mask_terms(used)
-    return all(model.is_forbidden(a | b) for k, a in enumerate(bits) for b in bits[k + 1:])
+def exclusive_hypotheses(model: Model, used: int) -> bool:
+    """Whether the model forbids every pair of the hypotheses in ``used``.
+
+    A pair a|b is forbidden when a constraint lies inside it: a, b or a|b itself.  So the
+    hypotheses forbidden on their own are set aside, and the others must have every one of
+    their pairs listed: the count of listed pairs inside them tells, in one pass over the
+    constraints (n² checks of the pairs themselves took seconds on a frame of a few hundred).
+    """
+    if model.kind == "shafer":
+        return True
+    alone = 0
+    for f in model.forbidden:
+        if not f & (f - 1):
+            alone |= f
+    rest = used & ~alone
+    k = rest.bit_count()
+    pairs = sum(1 for f in model.forbidden if f.bit_count() == 2 and not f & ~rest)
+    return pairs == k * (k - 1) // 2
 
 
 @lru_cache(maxsize=64)
@@ -510,8 +527,34 @@ def _reversed_bits(masks: np.ndarray, width: int) -> np.ndarray:
 
 
 def union_elements(frame: Frame, masks: Sequence[int]) -> list[Element]:
-    """The unions of hypotheses given by bit masks (0 gives ∅)."""
-    return make_elements(frame, [mask_terms(m) for m in masks])
+    """The unions of hypotheses given by bit masks (0 gives ∅).
+
+    On frames of at most :data:`RANK_TABLE_WIDTH` hypotheses the elements made are kept (at
+    most :data:`ELEMENT_CACHE_SIZE` a frame, for :data:`ELEMENT_CACHE_FRAMES` frames): the
+    same few unions come back in every mass function read, and elements are immutable.
+    """
+    if len(frame) > RANK_TABLE_WIDTH:
+        return make_elements(frame, union_terms(masks, len(frame)))
+    known = _ELEMENTS.get(frame)
+    if known is None:
+        if len(_ELEMENTS) >= ELEMENT_CACHE_FRAMES:
+            evict(_ELEMENTS)
+        known = _ELEMENTS[frame] = {}
+    found = list(map(known.get, masks))
+    if None not in found:
+        return found
+    missing = list(dict.fromkeys(m for m, e in zip(masks, found) if e is None))
+    made = dict(zip(missing, make_elements(frame, union_terms(missing, len(frame)))))
+    if len(known) + len(made) > ELEMENT_CACHE_SIZE:
+        known.clear()
+    known.update(made)
+    return [e if e is not None else made[m] for m, e in zip(masks, found)]
+
+
+#: How many elements made from masks are kept per frame, and for how many frames (:func:`union_elements`).
+ELEMENT_CACHE_SIZE = 4096
+ELEMENT_CACHE_FRAMES = 16
+_ELEMENTS: dict[Frame, dict[int, Element]] = {}
 
 
 def tuple_codes(arrays: Sequence[np.ndarray], ufunc) -> np.ndarray:
@@ -561,23 +604,37 @@ def canonical_codes(model: Model, encoding: Encoding, projected: Sequence[Sequen
             compact[present] = np.arange(len(present))
             return union_elements(model.frame, unrank[present].tolist()), compact[ranked]
         present, inverse = np.unique(codes, return_inverse=True)
-        order = np.lexsort((~_reversed_bits(present, n), np.bitwise_count(present)))
-        rank = np.empty(len(present), dtype=np.int64)
-        rank[order] = np.arange(len(present))
-        return union_elements(model.frame, present[order].tolist()), rank[inverse.reshape(-1)]
+        return canonical_groups(model, encoding, projected, present.reshape(-1, 1), None, inverse.reshape(-1), ops)
     unique, first, inverse = np.unique(codes, return_index=True, return_inverse=True)
+    return canonical_groups(model, encoding, projected, unique.reshape(-1, 1), first, inverse.reshape(-1), ops)
+
+
+def canonical_groups(model: Model, encoding: Encoding, projected: Sequence[Sequence[Element]], unique: np.ndarray,
+                     first: np.ndarray | None, inverse: np.ndarray,
+                     ops: np.ndarray | str) -> tuple[list[Element], np.ndarray]:
+    """:func:`canonical_codes` of tuples already grouped by their code (:func:`belief.masks.tuple_groups`).
+
+    ``unique`` holds the distinct codes as rows of 64-bit words, ``first`` a tuple that has
+    each (needed for region codes only), ``inverse`` each tuple's row of ``unique``.
+    """
+    if encoding.kind == "exclusive":
+        # Unions of hypotheses: sorted by their masks, and made from the masks alone.
+        order = canonical_order(unique)
+        rank = np.empty(len(order), dtype=np.int64)
+        rank[order] = np.arange(len(order))
+        return union_elements(model.frame, from_words(unique[order])), rank[inverse]
     sizes = tuple(len(c) for c in encoding.codes)
     tuples = list(zip(*(c.tolist() for c in np.unravel_index(first, sizes))))
     if isinstance(ops, str):
         kinds = [ops] * len(tuples)
     else:
         kinds = ["meet" if m else "join" for m in ops[first].tolist()]
-    elements = decode(model, encoding, projected, unique.tolist(), tuples, kinds)
+    elements = decode(model, encoding, projected, from_words(unique), tuples, kinds)
     keys = [e.sort_key for e in elements]
     order = sorted(range(len(elements)), key=keys.__getitem__)
     rank = np.empty(len(elements), dtype=np.int64)
     rank[order] = np.arange(len(elements))
-    return [elements[k] for k in order], rank[inverse.reshape(-1)]
+    return [elements[k] for k in order], rank[inverse]
 
 
 def coded_table(model: Model, projected: Sequence[Sequence[Element]], ufunc,
@@ -585,14 +642,23 @@ def coded_table(model: Model, projected: Sequence[Sequence[Element]], ufunc,
     """The ∩ (``np.bitwise_and``) or ∪ (``np.bitwise_or``) of every tuple from integer codes.
 
     Returns the distinct results and, per tuple in row-major order, an index into them
-    (as :attr:`TuplePlan.meet_table`), or None where the codes do not fit 64 bits.
+    (as :attr:`TuplePlan.meet_table`), or None where the codes are region codes wider than
+    64 bits, or there are none.  Hypothesis masks wider than 64 bits are rows of words,
+    combined a block of tuples at a time.
     """
     if encoding is None:
         encoding = encode(model, projected)
-    if encoding is None or encoding.width > 64:
+    if encoding is None:
         return None
-    combined = tuple_codes([np.array(c, dtype=np.uint64) for c in encoding.codes], ufunc)
-    return canonical_codes(model, encoding, projected, combined, "meet" if ufunc is np.bitwise_and else "join")
+    op = "meet" if ufunc is np.bitwise_and else "join"
+    if encoding.width <= 64:
+        combined = tuple_codes([np.array(c, dtype=np.uint64) for c in encoding.codes], ufunc)
+        return canonical_codes(model, encoding, projected, combined, op)
+    if encoding.kind != "exclusive":
+        return None                     # region codes of more than 64 bits: element by element (coded_fast)
+    words = word_count(encoding.width)
+    unique, first, inverse = tuple_groups([to_words(c, words) for c in encoding.codes], ufunc)
+    return canonical_groups(model, encoding, projected, unique, first, inverse, op)
 
 
 def row_chunks(n_rows: int, width: int):
@@ -752,9 +818,11 @@ class FoldBudget:
 
 
 def coded_fast(model: Model, focal: Sequence[Sequence[Element]] = ()) -> bool:
-    """Whether elements of ``model`` (or at least these focal elements) have codes of at most 64 bits (:func:`encode`).
+    """Whether elements of ``model`` (or at least these focal elements) have codes that numpy combines (:func:`encode`).
 
-    Without codes, tuples are combined element by element, thousands of times slower.
+    Those are region codes of at most 64 bits, or the hypothesis masks of unions of exclusive
+    hypotheses (of any width, :func:`coded_table`).  Without codes, tuples are combined
+    element by element, thousands of times slower.
     """
     if model.kind == "shafer":
         return True
@@ -768,4 +836,4 @@ def coded_fast(model: Model, focal: Sequence[Sequence[Element]] = ()) -> bool:
                 if t & (t - 1):
                     return False
                 used |= t
-    return bool(focal) and _exclusive(model, used)
+    return bool(focal) and exclusive_hypotheses(model, used)

@@ -3,21 +3,31 @@
 The focal elements are hypothesis bit masks, their intersections and unions ``&`` and ``|``, and no element
 is made (the result's are made when it is read).  :func:`combine_single` tells whether the path applies to a
 combination of :func:`~belief.rules.combine`, and gives its final result.
+
+A few tuples are looped over in Python; more go through numpy, on frames of up to 16 hypotheses by the rank
+tables of :func:`~belief.plan.union_ranks`, on wider ones by the masks as rows of 64-bit words
+(:mod:`belief.masks`).  What comes back is kept: the grouping of a pair's tuples (on the first mass function, or
+in a bounded table), and joint PCR written out as a function (:mod:`belief.joint_code`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from functools import lru_cache
+from itertools import product
 from math import fsum
+from typing import NamedTuple
 
 import numpy as np
 
 import belief.plan as limits
 from belief.batch import SUM_TOLERANCE
+from belief.joint_code import pcr_function
 from belief.mass import MassFunction, _set, _union_context
 from belief.model import Model
-from belief.plan import FoldBudget, _exclusive, check_joint, evict, tuple_codes, union_ranks
+from belief.masks import canonical_order, from_words, to_words, tuple_groups, union_key, word_count
+from belief.plan import (RANK_TABLE_WIDTH, FoldBudget, check_joint, evict, exclusive_hypotheses, tuple_codes,
+                         union_ranks)
 from belief.rules_classic import WIDE_SCALE, conjunctive, dempster, disjunctive, dsmc, dsmh, dubois_prade, yager
 from belief.rules_common import RESULT_TOLERANCE, Source, renormalised
 from belief.rules_pcr import pcr5, pcr6, pcr_loop, pcr_share_values, pcr_tables
@@ -26,10 +36,17 @@ from belief.rules_tuples import column_tuples, pairwise_sum, segment_sum
 
 #: A single combination of at most this many tuples is summed by a Python loop (numpy's calls cost more).
 SINGLE_LOOP_TUPLES = 96
-#: The same for the conflicting tuples of PCR5 and PCR6.
-PCR_LOOP_TUPLES = 128
+#: The same for joint PCR5 and PCR6, whose tuples are written out as a function when they come back
+#: (:mod:`belief.joint_code`): a call on them then costs less than numpy's.
+PCR_LOOP_TUPLES = 256
+#: Joint rules of more tuples than this are checked against the limits of :mod:`belief.plan` first.
+JOINT_UNCHECKED_TUPLES = 128
 #: How many single-row tables (:func:`_single_table`) are kept for focal elements that come back.
 SINGLE_CACHE_SIZE = 1024
+#: The single-row tables kept hold at most this many tuples in all (about 16 bytes each).
+SINGLE_CACHE_TUPLES = 1 << 22
+#: Two mass functions of at most this many tuples are combined by :func:`_pair_arrays` before anything else is tried.
+PAIR_ARRAY_TUPLES = 1 << 16
 
 _PAIR_KINDS = frozenset(("meet", "dempster", "join"))
 _JOINT_KINDS = frozenset(("pcr5", "pcr6", "dubois_prade", "dsmh"))
@@ -47,11 +64,12 @@ def combine_single(info: RuleInfo, sources: Sequence[Source], model: Model | Non
 
     This is the direct path at its leanest: the focal elements are hypothesis bit masks
     (:meth:`MassFunction._union_masks`), their intersections and unions ``&`` and ``|``, the
-    canonical order a look-up in :func:`~belief.plan.union_ranks`, and no element is made
-    (the result's are made when it is read).  It takes Shafer's model, or any model that
-    forbids every pair of the hypotheses in use, frames of up to
-    :data:`~belief.plan.RANK_TABLE_WIDTH` hypotheses, the sources' own model for the fusion,
-    and the built-in rules of :data:`_SINGLE_RULES`; anything else, every error, and
+    canonical order a look-up in :func:`~belief.plan.union_ranks` (or a sort of the masks on
+    frames wider than :data:`~belief.plan.RANK_TABLE_WIDTH`), and no element is made (the
+    result's are made when it is read).  It takes Shafer's model, or any model that forbids
+    every pair of the hypotheses in use (and, on wide frames, no hypothesis on its own), the
+    sources' own model for the fusion, and the built-in rules of :data:`_SINGLE_RULES`
+    (Dubois–Prade's and DSmH only up to the rank tables); anything else, every error, and
     Dempster's rule with a non-empty mass below :data:`WIDE_SCALE` (total conflict, or
     products that may have underflowed) go the general way (None).  Each step adds the same
     products in the same order as the plan of :mod:`belief.plan`, so the results are the
@@ -68,10 +86,30 @@ def combine_single(info: RuleInfo, sources: Sequence[Source], model: Model | Non
             masks1 = a._masks
             masks2 = b._masks
             if (b.model is source_model and (model is None or model is source_model) and masks1 is not None
-                    and masks2 is not None and len(masks1) * len(masks2) <= SINGLE_LOOP_TUPLES
-                    and source_model._unions and source_model.kind == "shafer"):
-                return _pair_loop(source_model, kind, masks1, a._floats or a._union_floats(), masks2,
-                                  b._floats or b._union_floats(), a)
+                    and masks2 is not None and source_model._unions and source_model.kind == "shafer"):
+                count = len(masks1) * len(masks2)
+                if count <= SINGLE_LOOP_TUPLES:
+                    return _pair_loop(source_model, kind, masks1, a._floats or a._union_floats(), masks2,
+                                      b._floats or b._union_floats(), a)
+                if count <= PAIR_ARRAY_TUPLES and a._floats is not None and b._floats is not None:
+                    if count > limits.MAX_TUPLES or 5 * count > limits.MAX_WORK or 24 * count > limits.MAX_BYTES:
+                        FoldBudget(info.name, 2).step(len(masks1), len(masks2), 2)      # it says which limit
+                    return _pair_arrays(source_model, kind, masks1, a._floats, masks2, b._floats)
+    elif kind in ("pcr6", "pcr5") and len(sources) > 1 and type(sources[0]) is MassFunction:
+        # The same sources again (a tracker, a repeated fusion): their grouping is kept on the first one.
+        first = sources[0]
+        memo = first._memo
+        if type(memo) is _JointTable and memo.plan is not None and memo.rule == kind:
+            source_model = first.model
+            if (len(memo.masks) == len(sources) and (model is None or model is source_model)
+                    and memo.count <= limits.MAX_TUPLES):
+                values = []
+                for m, mk in zip(sources, memo.masks):
+                    if type(m) is not MassFunction or m._masks is not mk or m.model is not source_model:
+                        break
+                    values.append(m._floats or m._union_floats())
+                else:
+                    return memo.combine(source_model, values)
     fused = _single_any(kind, info, sources, model)
     if fused is None:
         return None
@@ -94,9 +132,11 @@ def _single_any(kind: str, info: RuleInfo, sources: Sequence[Source], model: Mod
     context = source_model._unions
     if context is None:
         context = _union_context(source_model)
-    if not context:
+    n = len(source_model.frame)
+    if not context and not (n > RANK_TABLE_WIDTH and _wide_unions(source_model)):
         return None
-    n = len(source_model.frame._names)
+    if n > RANK_TABLE_WIDTH and kind in ("dubois_prade", "dsmh"):
+        return None                             # left to the plans, which have their elements
     masks = []
     count = 1
     for m in sources:
@@ -107,7 +147,7 @@ def _single_any(kind: str, info: RuleInfo, sources: Sequence[Source], model: Mod
                 return None
         masks.append(mk)
         count *= len(mk)
-    if kind in _JOINT_KINDS and (count > PCR_LOOP_TUPLES or count > limits.MAX_TUPLES):
+    if kind in _JOINT_KINDS and (count > min(PCR_LOOP_TUPLES, JOINT_UNCHECKED_TUPLES) or count > limits.MAX_TUPLES):
         check_joint(info.name, [len(mk) for mk in masks], 1, "pcr" if kind in ("pcr5", "pcr6") else "targets",
                     True, kind == "pcr5")
     if source_model.kind != "shafer":
@@ -115,7 +155,7 @@ def _single_any(kind: str, info: RuleInfo, sources: Sequence[Source], model: Mod
         for mk in masks:
             for x in mk:
                 used |= x
-        if not _exclusive(source_model, used):
+        if not exclusive_hypotheses(source_model, used):
             return None
     if count <= SINGLE_LOOP_TUPLES and len(masks) == 2 and kind in ("meet", "dempster", "join"):
         a, b = sources
@@ -124,7 +164,8 @@ def _single_any(kind: str, info: RuleInfo, sources: Sequence[Source], model: Mod
     if count <= PCR_LOOP_TUPLES and kind in ("pcr5", "pcr6"):
         if any(0 in mk for mk in masks):
             return None                         # mass on ∅: the general path refuses it
-        return _pcr_joint_loop(source_model, kind, masks, [m._floats or m._union_floats() for m in sources])
+        return _pcr_joint_loop(source_model, kind, masks, [m._floats or m._union_floats() for m in sources],
+                               sources[0])
     # The other evaluations follow the canonical order, as the plan does.
     masks = [m._union_masks() for m in sources]
     # Few tuples go through a Python loop on the floats, more through numpy on the arrays.
@@ -201,7 +242,7 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
     key = "join" if kind == "join" else "meet"
     if owner is not None:
         memo = owner._memo
-        if memo is not None and memo[0] is masks1 and memo[1] is masks2 and memo[2] == key:
+        if type(memo) is tuple and memo[0] is masks1 and memo[1] is masks2 and memo[2] == key:
             table = memo[3]
             if table is None:
                 table = _pair_table(masks1, masks2, key)
@@ -210,13 +251,29 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
         _set(owner, "_memo", (masks1, masks2, key, None))
     groups: dict = {}
     get = groups.get
-    if kind == "join":
+    normalise = False
+    if kind == "dempster":
+        # Dempster's rule reads nothing of ∅ but whether it was reached: its tuples are skipped.
+        for a, p in zip(masks1, values1):
+            for b, q in zip(masks2, values2):
+                c = a & b
+                if not c:
+                    normalise = True
+                    continue
+                group = get(c)
+                if group is None:
+                    groups[c] = p * q           # one product: no list
+                elif type(group) is float:
+                    groups[c] = [group, p * q]
+                else:
+                    group.append(p * q)
+    elif kind == "join":
         for a, p in zip(masks1, values1):
             for b, q in zip(masks2, values2):
                 c = a | b
                 group = get(c)
                 if group is None:
-                    groups[c] = p * q           # one product: no list
+                    groups[c] = p * q
                 elif type(group) is float:
                     groups[c] = [group, p * q]
                 else:
@@ -232,12 +289,20 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
                     groups[c] = [group, p * q]
                 else:
                     group.append(p * q)
-    normalise = kind == "dempster" and 0 in groups
-    if normalise:
-        del groups[0]
     sums = [group if type(group) is float else group[0] + group[1] if len(group) == 2 else fsum(group)
             for group in groups.values()]
-    return _pair_result(model, list(groups), sums, normalise, min(values1) * min(values2) > 0)
+    # _pair_result, inline: a call on new inputs pays for every function it enters.
+    scale = fsum(sums)
+    if normalise:
+        if not scale > WIDE_SCALE:
+            return None                         # underflow or total conflict: the general path tells which
+        sums = [x / scale for x in sums]
+    elif RESULT_TOLERANCE < abs(scale - 1.0) <= _PAIR_REACH:
+        sums = [x / scale for x in sums]
+    if not min(values1) * min(values2) > 0 and not all(x > 0 for x in sums):
+        pairs = [(f, x) for f, x in zip(groups, sums) if x > 0]
+        return MassFunction._from_masks(model, [f for f, _ in pairs], [x for _, x in pairs], True)
+    return MassFunction._from_masks(model, list(groups), sums, True)
 
 
 #: What :func:`renormalised` rescales in the result of two sources.
@@ -302,7 +367,78 @@ def _pair_from_table(model: Model, kind: str, table: tuple, values1, values2) ->
     return _pair_result(model, focal, sums, normalise, min(values1) * min(values2) > 0)
 
 
-def _pcr_joint_loop(model: Model, rule: str, masks: list, values: list) -> MassFunction:
+def _pair_arrays(model: Model, kind: str, masks1: Sequence[int], values1: Sequence[float], masks2: Sequence[int],
+                 values2: Sequence[float]) -> MassFunction | None:
+    """Two mass functions of many tuples, a rule of the ∩ or ∪ kind: numpy over the outer products, final.
+
+    The sources' masks are not sorted themselves: the tuples are put in the order in which the
+    plan adds them (:func:`_pair_order`: by target, then by the canonical positions of their
+    focal elements), so that the sums are the plan's to the last bit.  The order is kept
+    (:func:`_single_seen`) for when the same two meet again.  None where
+    Dempster's normalisation would divide by a non-empty mass below :data:`WIDE_SCALE`.
+    """
+    key = "join" if kind == "join" else "meet"
+    n = len(model.frame)
+    memo = (n, key, (tuple(masks1), tuple(masks2)))
+    table = _SINGLE_TABLES.get(memo)
+    if table is None:
+        table = _single_table(n, [masks1, masks2], key)
+        _single_seen(memo, table)
+    products = np.multiply.outer(np.array(values1), np.array(values2)).ravel()
+    sums = np.add.reduceat(products[table.order], table.starts)
+    focal = table.focal
+    normalised = kind == "dempster" and focal[0] == 0
+    if normalised:
+        kept = sums[1:]
+        scale = kept.sum()
+        if not scale > WIDE_SCALE:
+            return None                         # underflow or total conflict: the general path tells which
+        focal, sums = focal[1:], kept / scale
+    if min(values1) * min(values2) > 0:
+        # Every product is positive, and so is every sum: no zero to drop (see _single_any).
+        fused = MassFunction._from_masks(model, focal, sums)
+    else:
+        fused = _single_result(model, focal, sums)
+    # Quotients by their own sum add up to one within a few units in the last place, far inside
+    # RESULT_TOLERANCE: renormalised would return them as they are.
+    return fused if normalised else renormalised(fused, 2)
+
+
+class _PairOrder(NamedTuple):
+    """How the tuples of two focal lists group by target (:func:`_pair_order`)."""
+
+    order: np.ndarray                   # the tuples (row-major) sorted by target, then canonically
+    starts: np.ndarray                  # where each target's run begins
+    focal: tuple[int, ...]              # the targets, in canonical order
+
+
+def _pair_order(n: int, key: str, masks1: Sequence[int], masks2: Sequence[int]) -> _PairOrder:
+    """The :class:`_PairOrder` of two lists of hypothesis masks under ∩ (``key="meet"``) or ∪.
+
+    Each list is put in canonical order (its ranks, distinct, sorted by radix), the tuples of
+    the sorted lists are sorted by the rank of their target (stably, by radix), and the
+    result is mapped back to the tuples of the lists as given.
+    """
+    rank = _narrow_ranks(n)
+    a = np.array(masks1)
+    b = np.array(masks2)
+    first = rank[a].argsort(kind="stable")
+    second = rank[b].argsort(kind="stable")
+    ufunc = np.bitwise_and if key == "meet" else np.bitwise_or
+    ranked = rank[ufunc.outer(a[first], b[second])].ravel()
+    by_target = ranked.argsort(kind="stable")
+    rows, columns = np.divmod(by_target, len(b))
+    targets = ranked[by_target]
+    change = np.empty(len(targets), dtype=bool)
+    change[0] = True
+    np.not_equal(targets[1:], targets[:-1], out=change[1:])
+    starts = change.nonzero()[0]
+    order = first[rows] * len(b) + second[columns]
+    return _PairOrder(order, starts, tuple(union_ranks(n)[1][targets[starts]].tolist()))
+
+
+def _pcr_joint_loop(model: Model, rule: str, masks: list, values: list,
+                    owner: MassFunction | None = None) -> MassFunction:
     """PCR5 / PCR6 of a few tuples of unions of hypotheses, in one Python loop over the tuples.
 
     A tuple whose focal elements meet gives its product to the intersection (the
@@ -311,60 +447,49 @@ def _pcr_joint_loop(model: Model, rule: str, masks: list, values: list) -> MassF
     element is added by ``math.fsum``, so the result does not depend on the order of the
     focal elements and agrees with the plan's (consensus folded pairwise, then the
     shares) within a few units in the last place.
+
+    ``owner`` (the first source) remembers the focal elements of the sources: when the same
+    ones meet again, the tuples are grouped once into a :class:`_JointTable` kept on it, and
+    later calls only multiply, divide and add (:meth:`_JointTable.combine`), to the same bits.
     """
+    if owner is not None:
+        memo = owner._memo
+        if type(memo) is _JointTable and memo.rule == rule and memo.holds(masks):
+            return memo.combine(model, values)
+        _set(owner, "_memo", _JointTable(tuple(masks), rule))
     groups: dict = {}
     get = groups.get
-    pcr5 = rule == "pcr5"
-
-    def put(c, v):
-        group = get(c)
-        if group is None:
-            groups[c] = v
-        elif type(group) is float:
-            groups[c] = [group, v]
+    pcr5 = rule == "pcr5" and len(masks) > 2            # two distinct elements: PCR5 and PCR6 coincide
+    for combo in product(*[tuple(zip(mk, v)) for mk, v in zip(masks, values)]):
+        meet = -1
+        mass = 1.0
+        total = 0.0
+        for x, m in combo:
+            meet &= x
+            mass *= m
+            total += m
+        if meet:
+            shares = ((meet, mass),)
+        elif pcr5:
+            weights: dict = {}
+            for x, m in combo:
+                weights[x] = weights[x] * m if x in weights else m
+            total = 0.0
+            for w in weights.values():
+                total += w
+            factor = mass / total
+            shares = [(x, factor * w) for x, w in weights.items()]
         else:
-            group.append(v)
-
-    if len(masks) == 2:
-        tuples = ((a, b, p, q) for a, p in zip(masks[0], values[0]) for b, q in zip(masks[1], values[1]))
-        for a, b, p, q in tuples:
-            product = p * q
-            if a & b:
-                put(a & b, product)
-            else:                               # two distinct elements: PCR5 and PCR6 coincide
-                factor = product / (p + q)
-                put(a, factor * p)
-                put(b, factor * q)
-    else:
-        for columns in column_tuples([len(mk) for mk in masks]):
-            elements = [mk[k] for mk, k in zip(masks, columns)]
-            masses = [v[k] for v, k in zip(values, columns)]
-            meet = -1
-            for x in elements:
-                meet &= x
-            product = masses[0]
-            for m in masses[1:]:
-                product *= m
-            if meet:
-                put(meet, product)
-                continue
-            if pcr5:
-                weights: dict = {}
-                for x, m in zip(elements, masses):
-                    weights[x] = weights[x] * m if x in weights else m
-                total = 0.0
-                for w in weights.values():
-                    total += w
-                factor = product / total
-                for x, w in weights.items():
-                    put(x, factor * w)
+            factor = mass / total
+            shares = [(x, factor * m) for x, m in combo]
+        for c, v in shares:
+            group = get(c)
+            if group is None:
+                groups[c] = v
+            elif type(group) is float:
+                groups[c] = [group, v]
             else:
-                total = 0.0
-                for m in masses:
-                    total += m
-                factor = product / total
-                for x, m in zip(elements, masses):
-                    put(x, factor * m)
+                group.append(v)
     focal = []
     sums = []
     for c, group in groups.items():
@@ -373,6 +498,53 @@ def _pcr_joint_loop(model: Model, rule: str, masks: list, values: list) -> MassF
             focal.append(c)
             sums.append(x)
     return MassFunction._from_masks(model, tuple(focal), tuple(sums), True)
+
+
+class _JointTable:
+    """What the first source of a joint PCR combination remembers of its partners (see :func:`_pcr_joint_loop`).
+
+    ``masks`` are the sources' focal lists (the objects themselves: a mass function never
+    changes them, and one sorted anew holds new ones); ``plan`` the combination written
+    out for them (:func:`~belief.joint_code.pcr_function`), made when they come back.
+    """
+
+    __slots__ = ("masks", "rule", "plan", "count")
+
+    def __init__(self, masks: tuple, rule: str) -> None:
+        self.masks = masks
+        self.rule = rule
+        self.plan = None
+        self.count = 1
+        for mk in masks:
+            self.count *= len(mk)
+
+    def holds(self, masks: Sequence) -> bool:
+        """Whether these are the focal lists remembered (the same objects)."""
+        mine = self.masks
+        if len(mine) != len(masks):
+            return False
+        for a, b in zip(mine, masks):
+            if a is not b:
+                return False
+        return True
+
+    def combine(self, model: Model, values: Sequence[Sequence[float]]) -> MassFunction:
+        """The rule on the remembered focal lists with these masses, final: the loop's sums to the last bit.
+
+        Rescaled as :func:`~belief.rules_common.renormalised` rescales a result of these
+        sources, and without its zero masses.
+        """
+        if self.plan is None:
+            self.plan = pcr_function(self.masks, self.rule)
+        function, focal = self.plan
+        sums = function(*values)
+        if not min(sums) > 0:
+            kept = [k for k, x in enumerate(sums) if x > 0]
+            focal, sums = [focal[k] for k in kept], [sums[k] for k in kept]
+        total = fsum(sums)
+        if RESULT_TOLERANCE < abs(total - 1.0) <= 2 * len(values) * SUM_TOLERANCE:
+            sums = [x / total for x in sums]                        # as renormalised does
+        return MassFunction._from_masks(model, focal, sums, True)
 
 
 def _single_result(model: Model, focal: list[int], row: list | np.ndarray) -> MassFunction:
@@ -397,10 +569,10 @@ def _single_to_total(model: Model, n: int, focal: list[int], row: np.ndarray) ->
     if total in new_focal:
         new_values[new_focal.index(total)] += row[0]
         return new_focal, new_values
-    rank = union_ranks(n)[2]
+    key = _mask_key(n)
     new_focal.append(total)
     new_values = np.append(new_values, row[0])
-    order = sorted(range(len(new_focal)), key=lambda i: rank[new_focal[i]])
+    order = sorted(range(len(new_focal)), key=lambda i: key(new_focal[i]))
     return [new_focal[i] for i in order], new_values[order]
 
 
@@ -432,15 +604,32 @@ def _single_prune(focal: list[int], row: list | np.ndarray) -> tuple[list[int], 
 
 
 def _single_seen(key: tuple, table) -> None:
-    """Keep ``table`` if ``key`` was met before (its focal elements came back); else remember ``key``."""
+    """Keep ``table`` if ``key`` was met before (its focal elements came back); else remember ``key``.
+
+    The tables kept hold at most :data:`SINGLE_CACHE_TUPLES` tuples in all (``key[2]`` holds
+    the focal lists), the least recently kept going first.
+    """
     if _SINGLE_SIGHTINGS.pop(key, False):
-        if len(_SINGLE_TABLES) >= SINGLE_CACHE_SIZE:
-            evict(_SINGLE_TABLES)
+        size = _tuple_count(key)
+        if size > SINGLE_CACHE_TUPLES:
+            return
+        kept = sum(map(_tuple_count, list(_SINGLE_TABLES)))
+        while _SINGLE_TABLES and (len(_SINGLE_TABLES) >= SINGLE_CACHE_SIZE or kept + size > SINGLE_CACHE_TUPLES):
+            oldest = next(iter(_SINGLE_TABLES))
+            kept -= _tuple_count(oldest)
+            _SINGLE_TABLES.pop(oldest, None)
         _SINGLE_TABLES[key] = table
         return
     if len(_SINGLE_SIGHTINGS) >= SINGLE_CACHE_SIZE:
         evict(_SINGLE_SIGHTINGS)
     _SINGLE_SIGHTINGS[key] = True
+
+
+def _tuple_count(key: tuple) -> int:
+    count = 1
+    for masks in key[2]:
+        count *= len(masks)
+    return count
 
 
 def _outer(values: Sequence[np.ndarray]) -> np.ndarray:
@@ -475,9 +664,10 @@ def _single_targets(n: int, masks: list, values: list, key: str) -> tuple[list[i
 
 def _single_table(n: int, masks: list, key: str) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]] | None:
     """The order that sorts the tuples by target (stable), where each target's run starts, and the targets."""
+    if n > RANK_TABLE_WIDTH:
+        return _wide_table(n, masks, key)
     if len(masks) == 2 and key in ("meet", "join"):
-        ufunc = np.bitwise_and if key == "meet" else np.bitwise_or
-        codes = ufunc.outer(np.array(masks[0]), np.array(masks[1]))
+        return _pair_order(n, key, masks[0], masks[1])          # also for masks in any order
     else:
         arrays = [np.array(mk, dtype=np.int64) for mk in masks]
         if key == "meet":
@@ -500,10 +690,38 @@ def _single_table(n: int, masks: list, key: str) -> tuple[np.ndarray, np.ndarray
     return order, starts, tuple(union_ranks(n)[1][sorted_ranks[starts]].tolist())
 
 
+def _wide_table(n: int, masks: list, key: str) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
+    """:func:`_single_table` beyond the rank tables: the tuples grouped by their result's words, then sorted."""
+    words = word_count(n)
+    unique, _, inverse = tuple_groups([to_words(mk, words) for mk in masks],
+                                      np.bitwise_and if key == "meet" else np.bitwise_or)
+    canonical = canonical_order(unique)
+    rank = np.empty(len(canonical), dtype=np.int64 if len(canonical) >= 1 << 31 else np.int32)
+    rank[canonical] = np.arange(len(canonical))
+    order = rank[inverse].argsort(kind="stable")
+    # Every distinct result is present: its run starts after the runs of those before it.
+    sizes = np.bincount(rank[inverse], minlength=len(canonical))
+    starts = np.zeros(len(canonical), dtype=np.int64)
+    np.cumsum(sizes[:-1], out=starts[1:])
+    return order, starts, tuple(from_words(unique[canonical]))
+
+
 @lru_cache(maxsize=None)
 def _narrow_ranks(n: int) -> np.ndarray:
     """:func:`~belief.plan.union_ranks` in the narrowest unsigned type (small keys sort by radix)."""
     return union_ranks(n)[0].astype(np.uint8 if n <= 8 else np.uint16)
+
+
+@lru_cache(maxsize=64)
+def _wide_unions(model: Model) -> bool:
+    """Whether unions of hypotheses are their own form under a model of a frame too wide for the rank tables."""
+    return model.kind == "shafer" or all(f & (f - 1) for f in model.forbidden)
+
+
+@lru_cache(maxsize=64)
+def _mask_key(n: int):
+    """The sort key of hypothesis masks of n hypotheses in canonical order (:func:`~belief.masks.union_key`)."""
+    return union_key(n, union_ranks(n)[2] if n <= RANK_TABLE_WIDTH else None)
 
 
 def _single_loop(n: int, masks: list, values: list, key: str) -> tuple[list[int], list[float]] | None:
@@ -546,7 +764,7 @@ def _single_loop(n: int, masks: list, values: list, key: str) -> tuple[list[int]
                 groups[c] = [p]
             else:
                 group.append(p)
-    focal = sorted(groups, key=union_ranks(n)[2].__getitem__)
+    focal = sorted(groups, key=_mask_key(n))
     sums = []
     for c in focal:
         group = groups[c]
@@ -557,15 +775,14 @@ def _single_loop(n: int, masks: list, values: list, key: str) -> tuple[list[int]
 def _single_pcr(model: Model, n: int, masks: list, values: list, rule: str) -> MassFunction:
     """PCR5 / PCR6 of mass functions of unions of hypotheses: :func:`~belief.rules_pcr.pcr6` (or pcr5) on masks."""
     focal, consensus = _single_fold(n, masks, values, "meet")
-    rank = union_ranks(n)[2]
+    key = _mask_key(n)
     count = 1
     for mk in masks:
         count *= len(mk)
     memo = (n, rule, tuple(masks))
     tables = _SINGLE_TABLES.get(memo)
     if tables is None and count <= PCR_LOOP_TUPLES:
-        targets, shares = pcr_loop(masks, [v if type(v) is not np.ndarray else v.tolist() for v in values], rule,
-                                   rank.__getitem__)
+        targets, shares = pcr_loop(masks, [v if type(v) is not np.ndarray else v.tolist() for v in values], rule, key)
     else:
         if tables is None:
             tables = _single_pcr_tables(n, masks, rule)
@@ -573,7 +790,7 @@ def _single_pcr(model: Model, n: int, masks: list, values: list, rule: str) -> M
         targets, shares = pcr_share_values(1, [np.asarray(v).reshape(1, -1) for v in values], tables)
     # As PCR5 and PCR6 add them: the consensus without ∅, plus the shares.
     keep = [i for i, x in enumerate(focal) if x]
-    union = sorted({focal[i] for i in keep} | set(targets), key=rank.__getitem__)
+    union = sorted({focal[i] for i in keep} | set(targets), key=key)
     index = {x: k for k, x in enumerate(union)}
     out = np.zeros((1, len(union)))
     out[:, [index[focal[i]] for i in keep]] += np.asarray(consensus)[keep]
@@ -583,11 +800,14 @@ def _single_pcr(model: Model, n: int, masks: list, values: list, rule: str) -> M
 
 def _single_pcr_tables(n: int, masks: list, rule: str):
     """:func:`pcr_tables` of mass functions of unions of hypotheses."""
-    arrays = [np.array(mk, dtype=np.int64) for mk in masks]
-    conflict = np.flatnonzero(tuple_codes(arrays, np.bitwise_and) == 0)
+    if n < 64:
+        arrays = [np.array(mk, dtype=np.int64) for mk in masks]
+        conflict = np.flatnonzero(tuple_codes(arrays, np.bitwise_and) == 0)
+    else:
+        unique, _, inverse = tuple_groups([to_words(mk, word_count(n)) for mk in masks], np.bitwise_and)
+        conflict = np.flatnonzero(~unique.any(axis=1)[inverse])
     columns = tuple(c.astype(np.int64, copy=False) for c in np.unravel_index(conflict, [len(mk) for mk in masks]))
-    rank = union_ranks(n)[2]
-    unique = sorted({x for mk in masks for x in mk}, key=rank.__getitem__)
+    unique = sorted({x for mk in masks for x in mk}, key=_mask_key(n))
     index = {x: k for k, x in enumerate(unique)}
     per_source = [np.array([index[x] for x in mk], dtype=np.int64) for mk in masks]
     return pcr_tables(columns, unique, per_source, rule, ranked=True)

@@ -4,8 +4,10 @@ A tuple picks one focal element of each source, and its product Π m_i(X_i) goes
 intersection, the union, or the element Dubois–Prade's rule or DSmH names.  Focal elements met for the first
 time are combined directly, on integer codes of the elements (:func:`direct_path`): by a Python loop over the
 tuples of one row, or by numpy over all of them.  When they come back, the compiled plan of :mod:`belief.plan`
-serves them (:func:`target_kernel`).  Both add the same products in the same order.  The associative rules are
-folded pairwise (:func:`fold`), each step checked against the limits of :mod:`belief.plan` first.
+serves them (:func:`target_kernel`).  Both add the same products in the same order: ``np.add.reduceat`` for a
+few rows, a :class:`~belief.segments.RunProgram` (numpy's order of additions, replayed on blocks of rows) for
+many.  The associative rules are folded pairwise (:func:`fold`), each step checked against the limits of
+:mod:`belief.plan` first.
 """
 
 from __future__ import annotations
@@ -24,8 +26,11 @@ from belief.batch import MassBatch
 from belief.errors import InvalidMassError, ModelError
 from belief.frame import Element
 from belief.model import Model
-from belief.plan import (Encoding, FoldBudget, Scatter, TuplePlan, canonical_codes, check_joint, coded_fast, decode,
-                         encode, gather_product, plan_lookup, row_chunks, sighted, tuple_codes, tuple_plan)
+from belief.masks import to_words, tuple_groups, word_count
+from belief.plan import (Encoding, FoldBudget, Scatter, TuplePlan, canonical_codes, canonical_groups, check_joint,
+                         coded_fast, decode, encode, gather_product, plan_lookup, row_chunks, sighted, tuple_codes,
+                         tuple_plan)
+from belief.segments import PROGRAM_MIN_ROWS, RunProgram, program_pays
 
 
 # -- shared machinery ----------------------------------------------------------------------------
@@ -131,7 +136,8 @@ def direct_path(batches: Sequence[MassBatch], model: Model, purpose: str) -> Dir
     single = all(len(b) == 1 for b in batches)
     if single and count <= LOOP_TUPLES:
         return Direct(projected, encoding, True)
-    if encoding.width <= 64:
+    if encoding.width <= 64 or (purpose == "targets" and encoding.kind == "exclusive"):
+        # Wide hypothesis masks are rows of words (belief.masks); PCR's tables take 64-bit codes only.
         return Direct(projected, encoding, False)
     if single and count <= WIDE_LOOP_TUPLES:
         return Direct(projected, encoding, True)
@@ -251,8 +257,19 @@ def _loop_targets(batches: Sequence[MassBatch], model: Model, key: str, direct: 
     return MassBatch._trusted(model, tuple(elements[k] for k in order), values, canonical=True)
 
 
-def _array_targets(batches: Sequence[MassBatch], model: Model, key: str, direct: Direct) -> MassBatch | None:
+def _array_targets(batches: Sequence[MassBatch], model: Model, key: str, direct: Direct,
+                   normalise: bool = False) -> MassBatch | None:
     """Each tuple's product to one element, on all tuples at once; the arithmetic of the plan path."""
+    if direct.encoding.width > 64:
+        if key not in ("meet", "join"):
+            return None                     # wide masks of Dubois–Prade and DSmH: the plan path
+        words = word_count(direct.encoding.width)
+        unique, first, inverse = tuple_groups([to_words(c, words) for c in direct.encoding.codes],
+                                              np.bitwise_and if key == "meet" else np.bitwise_or)
+        elements, ranks = canonical_groups(model, direct.encoding, direct.projected, unique, first, inverse, key)
+        scatter = Scatter.from_ranks(elements, ranks)
+        columns = tuple(c.astype(np.int64, copy=False) for c in np.unravel_index(scatter.order, direct.sizes))
+        return _scatter_products(batches, model, scatter, columns, len(inverse), None, normalise)
     arrays = [np.array(c, dtype=np.uint64) for c in direct.encoding.codes]
     meet = tuple_codes(arrays, np.bitwise_and) if key != "join" else None
     join = tuple_codes(arrays, np.bitwise_or) if key != "meet" else None
@@ -269,16 +286,39 @@ def _array_targets(batches: Sequence[MassBatch], model: Model, key: str, direct:
                                       key if use_meet is None else use_meet)
     scatter = Scatter.from_ranks(elements, ranks)
     columns = tuple(c.astype(np.int64, copy=False) for c in np.unravel_index(scatter.order, direct.sizes))
-    return _scatter_products(batches, model, scatter, columns, len(targets))
+    return _scatter_products(batches, model, scatter, columns, len(targets), None, normalise)
 
 
 def _scatter_products(batches: Sequence[MassBatch], model: Model, scatter: Scatter,
-                      columns: tuple[np.ndarray, ...], count: int) -> MassBatch:
+                      columns: tuple[np.ndarray, ...], count: int, program=None,
+                      normalise: bool = False) -> MassBatch:
+    """Sum the tuples' products by target: ``reduceat`` on a few rows, a :class:`RunProgram` on many.
+
+    ``program`` is a callable that gives the program (cached with a plan) or None; the two
+    evaluations add the same numbers in the same order.  With ``normalise`` (Dempster's rule,
+    see :func:`fold`) a program may return the rows normalised, without ∅.
+    """
     n, values = broadcast_values(batches)
+    skip = (0,) if normalise and scatter.elements and not scatter.elements[0].terms else ()
+    if n >= PROGRAM_MIN_ROWS:
+        kernel = program(skip) if program is not None else RunProgram(columns, scatter.starts, skip)
+        if program_pays(n, len(scatter.starts), kernel.operations, count):
+            if skip:
+                rows = kernel.evaluate_normalised(values, DEMPSTER_SMALLEST_SCALE)
+                if rows is not None:
+                    return MassBatch._trusted(model, scatter.elements[1:], rows, canonical=True)
+            return MassBatch._trusted(model, scatter.elements, kernel.evaluate(values), canonical=True)
     out = np.empty((n, len(scatter.elements)))
     for rows in row_chunks(n, count):
         out[rows] = scatter.apply(gather_product([v[rows] for v in values], columns))
     return MassBatch._trusted(model, scatter.elements, out, canonical=True)
+
+
+@lru_cache(maxsize=512)
+def target_program(plan: TuplePlan, key: str, skip: tuple[int, ...]) -> RunProgram:
+    """The :class:`~belief.segments.RunProgram` of a plan's :func:`target_kernel` (cached with it)."""
+    scatter, columns = target_kernel(plan, key)
+    return RunProgram(columns, scatter.starts, skip)
 
 
 @lru_cache(maxsize=512)
@@ -293,16 +333,23 @@ def target_kernel(plan: TuplePlan, key: str) -> tuple[Scatter, tuple[np.ndarray,
     return scatter, tuple(c[scatter.order] for c in plan.columns)
 
 
-def tuple_targets_rule(batches: Sequence[MassBatch], model: Model, key: str) -> MassBatch:
-    """Rules that send each tuple's whole product to one element."""
+def tuple_targets_rule(batches: Sequence[MassBatch], model: Model, key: str, normalise: bool = False) -> MassBatch:
+    """Rules that send each tuple's whole product to one element.
+
+    With ``normalise``, batches of many rows may come back normalised as Dempster's rule does (see :func:`fold`).
+    """
     direct = direct_path(batches, model, "targets")
     if direct is not None:
-        result = (_loop_targets if direct.loop else _array_targets)(batches, model, key, direct)
+        if direct.loop:
+            result = _loop_targets(batches, model, key, direct)
+        else:
+            result = _array_targets(batches, model, key, direct, normalise)
         if result is not None:
             return result
     plan = checked_plan(batches, model)
     scatter, columns = target_kernel(plan, key)
-    return _scatter_products(batches, model, scatter, columns, plan.count)
+    return _scatter_products(batches, model, scatter, columns, plan.count,
+                             lambda skip: target_program(plan, key, skip), normalise)
 
 
 #: Two sources whose tuples × rows are at most this many are combined without a cost estimate.
@@ -318,17 +365,29 @@ def prune(batch: MassBatch) -> MassBatch:
                               canonical=batch._canonical)
 
 
+#: A fold of two sources under these rules may come back normalised, without ∅: Dempster's rule drops ∅ and
+#: divides each row by the rest (rules_classic._move_empty, to the same bits), which a RunProgram does block by
+#: block while the sums are in the processor's cache.
+NORMALISED_FOLDS = frozenset(("dempster",))
+#: rules_classic.WIDE_SCALE: below it, the rows are left unnormalised for Dempster's rule to decide.
+DEMPSTER_SMALLEST_SCALE = 2.0 ** -40
+
+
 def fold(batches: Sequence[MassBatch], model: Model, key: str, rule: str = "conjunctive") -> MassBatch:
-    """Combine pairwise, left to right, each step checked against the limits of :mod:`belief.plan` first."""
+    """Combine pairwise, left to right, each step checked against the limits of :mod:`belief.plan` first.
+
+    Two sources of many rows under a rule of :data:`NORMALISED_FOLDS` may come back
+    normalised, without ∅.  More sources never do: a partial result is pruned of its zero
+    columns between the steps, and a ∅ column must then mean what it meant before.
+    """
     if len(batches) == 2 and len(batches[0].focal) * len(batches[1].focal) * len(batches[0]) * len(batches[1]) \
             <= SMALL_PAIR:
         return tuple_targets_rule(batches, model, key)        # far below every limit: not worth the check
     budget = _budget(batches, model, rule)
     budget.step(len(batches[0].focal), len(batches[1].focal), 2)
-    result = tuple_targets_rule(batches[:2], model, key)
     if len(batches) == 2:
-        return result
-    result = prune(result)
+        return tuple_targets_rule(batches, model, key, rule in NORMALISED_FOLDS)
+    result = prune(tuple_targets_rule(batches[:2], model, key))
     for number, b in enumerate(batches[2:], start=3):
         budget.step(len(result.focal), len(b.focal), number)
         result = prune(tuple_targets_rule([result, b.under(model) if b.model != model else b], model, key))
