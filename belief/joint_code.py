@@ -74,7 +74,9 @@ def _generated(masks: tuple[tuple[int, ...], ...], rule: str) -> tuple[Callable[
                 weights.setdefault(x, []).append(source)
             parts = {x: " * ".join(writer.mass(i, columns[i]) for i in sources) for x, sources in weights.items()}
             named = {x: writer.assign(text) if " " in text else text for x, text in parts.items()}
-            factor = writer.assign(f"{mass} / ({' + '.join(named.values())})")
+            # Every group weight may have underflowed, and the product with them: the tuple then shares nothing.
+            total = writer.assign(" + ".join(named.values()))
+            factor = writer.assign(f"{mass} / {total} if {total} > 0.0 else 0.0")
             for x, weight in named.items():
                 groups.setdefault(x, []).append(f"{factor} * {weight}")
         else:

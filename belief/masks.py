@@ -23,7 +23,7 @@ from itertools import islice
 import numpy as np
 
 __all__ = ["WORD_BITS", "word_count", "to_words", "from_words", "canonical_order", "union_key", "union_terms",
-           "tuple_groups", "TUPLE_BLOCK_WORDS"]
+           "tuple_codes", "tuple_groups", "TUPLE_BLOCK_WORDS"]
 
 WORD_BITS = 64
 #: Tuples are combined in blocks of about this many words (8 bytes each).
@@ -192,8 +192,8 @@ def _codes_at(arrays: Sequence[np.ndarray], ufunc, sizes: Sequence[int], tuples:
     return out
 
 
-def _broadcast_codes(codes: Sequence[np.ndarray], ufunc) -> np.ndarray:
-    """``ufunc`` folded over one code per source for every tuple, row-major, shape (T,)."""
+def tuple_codes(codes: Sequence[np.ndarray], ufunc) -> np.ndarray:
+    """``ufunc`` folded over one code per source for every tuple, in row-major tuple order, shape (T,)."""
     s = len(codes)
     out = codes[0].reshape((-1,) + (1,) * (s - 1))
     for i, a in enumerate(codes[1:], start=1):
@@ -224,7 +224,7 @@ def tuple_groups(arrays: Sequence[np.ndarray], ufunc) -> tuple[np.ndarray, np.nd
         count *= k
     width = arrays[0].shape[1]
     if width == 1:
-        codes = _broadcast_codes([a[:, 0] for a in arrays], ufunc)
+        codes = tuple_codes([a[:, 0] for a in arrays], ufunc)
         unique, first, inverse = np.unique(codes, return_index=True, return_inverse=True)
         return unique.reshape(-1, 1), first, inverse.reshape(-1)
     step = max(1, TUPLE_BLOCK_WORDS // width)

@@ -31,7 +31,7 @@ import numpy as np
 
 from belief.errors import CombinationTooLargeError
 from belief.frame import Element, Frame, make_elements
-from belief.masks import canonical_order, from_words, to_words, tuple_groups, union_terms, word_count
+from belief.masks import canonical_order, from_words, to_words, tuple_codes, tuple_groups, union_terms, word_count
 from belief.model import Model
 
 __all__ = ["TuplePlan", "Scatter", "FocalKey", "tuple_plan", "MAX_TUPLES", "MAX_WORK", "MAX_BYTES",
@@ -555,15 +555,6 @@ def union_elements(frame: Frame, masks: Sequence[int]) -> list[Element]:
 ELEMENT_CACHE_SIZE = 4096
 ELEMENT_CACHE_FRAMES = 16
 _ELEMENTS: dict[Frame, dict[int, Element]] = {}
-
-
-def tuple_codes(arrays: Sequence[np.ndarray], ufunc) -> np.ndarray:
-    """``ufunc`` folded over one code per source for every tuple, in row-major tuple order, shape (T,)."""
-    s = len(arrays)
-    out = arrays[0].reshape((-1,) + (1,) * (s - 1))
-    for i, a in enumerate(arrays[1:], start=1):
-        out = ufunc(out, a.reshape((1,) * i + (-1,) + (1,) * (s - 1 - i)))
-    return out.reshape(-1)
 
 
 def decode(model: Model, encoding: Encoding, projected: Sequence[Sequence[Element]], codes: Sequence[int],

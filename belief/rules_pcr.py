@@ -14,7 +14,8 @@ import numpy as np
 from belief.batch import MassBatch
 from belief.frame import Element
 from belief.model import Model
-from belief.plan import Scatter, TuplePlan, row_chunks, tuple_codes
+from belief.masks import tuple_codes
+from belief.plan import Scatter, TuplePlan, row_chunks
 from belief.rules_registry import register_rule
 from belief.rules_tuples import (Direct, broadcast_values, check_joint_sources, checked_plan, column_tuples,
                                  direct_path, fold, require_nonempty, require_normal, segment_sum)

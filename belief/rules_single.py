@@ -25,9 +25,8 @@ from belief.batch import SUM_TOLERANCE
 from belief.joint_code import pcr_function
 from belief.mass import MassFunction, _set, _union_context
 from belief.model import Model
-from belief.masks import canonical_order, from_words, to_words, tuple_groups, union_key, word_count
-from belief.plan import (RANK_TABLE_WIDTH, FoldBudget, check_joint, evict, exclusive_hypotheses, tuple_codes,
-                         union_ranks)
+from belief.masks import canonical_order, from_words, to_words, tuple_codes, tuple_groups, union_key, word_count
+from belief.plan import (RANK_TABLE_WIDTH, FoldBudget, check_joint, evict, exclusive_hypotheses, union_ranks)
 from belief.rules_classic import WIDE_SCALE, conjunctive, dempster, disjunctive, dsmc, dsmh, dubois_prade, yager
 from belief.rules_common import RESULT_TOLERANCE, Source, renormalised
 from belief.rules_pcr import pcr5, pcr6, pcr_loop, pcr_share_values, pcr_tables
@@ -252,43 +251,22 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
     groups: dict = {}
     get = groups.get
     normalise = False
-    if kind == "dempster":
-        # Dempster's rule reads nothing of ∅ but whether it was reached: its tuples are skipped.
-        for a, p in zip(masks1, values1):
-            for b, q in zip(masks2, values2):
-                c = a & b
-                if not c:
-                    normalise = True
-                    continue
-                group = get(c)
-                if group is None:
-                    groups[c] = p * q           # one product: no list
-                elif type(group) is float:
-                    groups[c] = [group, p * q]
-                else:
-                    group.append(p * q)
-    elif kind == "join":
-        for a, p in zip(masks1, values1):
-            for b, q in zip(masks2, values2):
-                c = a | b
-                group = get(c)
-                if group is None:
-                    groups[c] = p * q
-                elif type(group) is float:
-                    groups[c] = [group, p * q]
-                else:
-                    group.append(p * q)
-    else:
-        for a, p in zip(masks1, values1):
-            for b, q in zip(masks2, values2):
-                c = a & b
-                group = get(c)
-                if group is None:
-                    groups[c] = p * q
-                elif type(group) is float:
-                    groups[c] = [group, p * q]
-                else:
-                    group.append(p * q)
+    join = kind == "join"
+    dempster = kind == "dempster"
+    for a, p in zip(masks1, values1):
+        for b, q in zip(masks2, values2):
+            c = a | b if join else a & b
+            if not c and dempster:
+                # Dempster's rule reads nothing of ∅ but whether it was reached: its tuples are skipped.
+                normalise = True
+                continue
+            group = get(c)
+            if group is None:
+                groups[c] = p * q               # one product: no list
+            elif type(group) is float:
+                groups[c] = [group, p * q]
+            else:
+                group.append(p * q)
     sums = [group if type(group) is float else group[0] + group[1] if len(group) == 2 else fsum(group)
             for group in groups.values()]
     # _pair_result, inline: a call on new inputs pays for every function it enters.
@@ -477,7 +455,8 @@ def _pcr_joint_loop(model: Model, rule: str, masks: list, values: list,
             total = 0.0
             for w in weights.values():
                 total += w
-            factor = mass / total
+            # Every group weight underflowed, and the product with them: the tuple shares nothing.
+            factor = mass / total if total > 0.0 else 0.0
             shares = [(x, factor * w) for x, w in weights.items()]
         else:
             factor = mass / total

@@ -26,10 +26,9 @@ from belief.batch import MassBatch
 from belief.errors import InvalidMassError, ModelError
 from belief.frame import Element
 from belief.model import Model
-from belief.masks import to_words, tuple_groups, word_count
+from belief.masks import to_words, tuple_codes, tuple_groups, word_count
 from belief.plan import (Encoding, FoldBudget, Scatter, TuplePlan, canonical_codes, canonical_groups, check_joint,
-                         coded_fast, decode, encode, gather_product, plan_lookup, row_chunks, sighted, tuple_codes,
-                         tuple_plan)
+                         coded_fast, decode, encode, gather_product, plan_lookup, row_chunks, sighted, tuple_plan)
 from belief.segments import PROGRAM_MIN_ROWS, RunProgram, program_pays
 
 

@@ -64,16 +64,14 @@ Found and fixed: the closed form of m∩(∅) took Σ_{e′≠e} m(θ_e′) as �
 (test_the_closed_forms_keep_the_small_masses_beside_a_nearly_certain_exclusive_hypothesis).
 
 Known disagreements, each in a file that this module leaves to others (the strict xfail tests
-at its end reproduce them):
+at its end reproduce them); PCR5 of four or more single mass functions, whose group weights
+may all underflow, was one (test_pcr5_of_underflowing_group_weights_is_defined):
 
 * the R-weighted rule computes its m0 weights in double precision, so where a weight is below
   2⁻¹⁰²² it has lost digits or underflowed to zero (and the rule falls back to the sources'
   support), and the shares (1 − R)·k go to other elements than SPEC A.4 says
   (``belief/rules_r.py``, and the closed form's folds in ``belief/bayesian_fold.py``): such cases
-  are left out here (:func:`m0_below_doubles`);
-* PCR5 of four or more single mass functions divides by the sum of a conflicting tuple's
-  group weights when every one of them underflowed (``belief/rules_single.py``): that
-  engine's ZeroDivisionError is set aside here.
+  are left out here (:func:`m0_below_doubles`).
 
 The suite runs a few examples per rule; ``--hypothesis-profile=thorough`` (tests/conftest.py)
 runs many, e.g. ``pytest tests/test_engine_equality.py -p no:randomly --hypothesis-profile=thorough
@@ -494,12 +492,6 @@ def bound(rule: str, expected: Expected, measure: str, want: Fraction,
     return count * Fraction(U) * want + count * Fraction(SMALLEST) / scale + 2 * spread
 
 
-def known_issue(outcome: Outcome, rule: str) -> bool:
-    """PCR5's ZeroDivisionError on single mass functions (test_pcr5_of_underflowing_group_weights_is_defined)."""
-    return (rule == "pcr5" and outcome.engine.startswith("mass functions") and isinstance(outcome.result, Failure)
-            and outcome.result.kind == "ZeroDivisionError")
-
-
 def excesses(outcome: Outcome, expected: list[Expected], rule: str, case: Case):
     """(error / bound, what) of every value of an outcome: a ratio above 1 is a disagreement (inf: a wrong error)."""
     where = f"{outcome.engine}{' ' + outcome.measure if outcome.measure else ''}, rows {outcome.rows}"
@@ -550,7 +542,7 @@ def check(case: Case, rule: str) -> None:
     expected = reference_rows(case, rule)
     if rule == "r_rule":
         assume(not m0_below_doubles(expected))
-    outcomes = [outcome for outcome in run_engines(case, rule) if not known_issue(outcome, rule)]
+    outcomes = list(run_engines(case, rule))
     for outcome in outcomes:
         for ratio, what in excesses(outcome, expected, rule, case):
             assert ratio <= 1.0, f"{what}: the error is {ratio:.3g} times the bound"
@@ -629,9 +621,7 @@ def test_the_closed_forms_keep_the_small_masses_beside_a_nearly_certain_exclusiv
     check(case, rule)
 
 
-# -- disagreements found, left to the files that hold them (tests/equality_findings) ------------------------
-@pytest.mark.xfail(strict=True, reason="belief/rules_single.py: _pcr_joint_loop divides by the sum of a conflicting "
-                                       "tuple's PCR5 group weights, which is 0 when every one of them underflowed")
+# -- disagreements found: fixed, and left to the files that hold them ------------------------------------------------------
 def test_pcr5_of_underflowing_group_weights_is_defined():
     # The tuple (b, a, b, a) has two groups, b and a, each of weight 1e-200 · 1e-200 = 0 in doubles;
     # its product is 0 as well, so it shares nothing (the general path skips it, as SPEC A.3 says).
@@ -640,7 +630,8 @@ def test_pcr5_of_underflowing_group_weights_is_defined():
     on_a, on_b = {"a": 1.0, "b": 1e-200}, {"a": 1e-200, "b": 1.0}
     sources = [MassFunction(m, model=shafer) for m in (on_a, on_b, on_a, on_b)]
     general = combine(*[m.batch() for m in sources], rule="pcr5", engine="general")[0]
-    assert combine(*sources, rule="pcr5").isclose(general, rel_tol=1e-15, abs_tol=0.0)
+    for call in ("first", "again"):             # the loop, then the code written for these focal lists
+        assert combine(*sources, rule="pcr5").isclose(general, rel_tol=1e-15, abs_tol=0.0), call
 
 
 @pytest.mark.xfail(strict=True, reason="belief/rules_r.py (_r_pair_entries) and belief/bayesian_fold.py compute the "

@@ -104,18 +104,24 @@ def outcome(batches, rule):
     return result.focal, result.values.tolist()
 
 
-@pytest.mark.parametrize("rule", ["conjunctive", "dsmc", "dempster", "disjunctive", "yager", "dubois_prade", "dsmh",
-                                  "pcr6"])
-@pytest.mark.parametrize("seed", range(6))
-def test_batches_summed_by_programs_equal_batches_summed_by_reduceat(rule, seed, monkeypatch):
-    batches = batch_case(seed)
+def both_ways(monkeypatch, run) -> dict:
+    """``run()`` with the runs of products summed by ``np.add.reduceat`` and by a :class:`RunProgram`, from cold caches."""
     got = {}
     for name, minimum in (("reduceat", 10 ** 9), ("program", 0)):
         with monkeypatch.context() as mp:
             mp.setattr(tuples, "PROGRAM_MIN_ROWS", minimum)
             mp.setattr(tuples, "program_pays", lambda *args: True)
             clear_caches()
-            got[name] = [outcome(batches, rule) for _ in range(3)]      # direct path, then the plan
+            got[name] = run()
+    return got
+
+
+@pytest.mark.parametrize("rule", ["conjunctive", "dsmc", "dempster", "disjunctive", "yager", "dubois_prade", "dsmh",
+                                  "pcr6"])
+@pytest.mark.parametrize("seed", range(6))
+def test_batches_summed_by_programs_equal_batches_summed_by_reduceat(rule, seed, monkeypatch):
+    batches = batch_case(seed)
+    got = both_ways(monkeypatch, lambda: [outcome(batches, rule) for _ in range(3)])    # direct path, then the plan
     assert got["program"] == got["reduceat"]
     assert got["program"][0] == got["program"][1] == got["program"][2]
 
@@ -329,12 +335,6 @@ def test_dempsters_rows_normalised_block_by_block_are_those_normalised_afterward
     first[7] = [1.0 - 2e-13, 1e-13, 1e-13]                     # nearly total conflict: a non-empty mass of ~1e-26
     second[7] = [0.0, 0.5, 0.5]
     batches = [MassBatch(["a", "b", "c"], first, model=shafer), MassBatch(["a", "b", "c"], second, model=shafer)]
-    got = {}
-    for name, minimum in (("reduceat", 10 ** 9), ("program", 0)):
-        with monkeypatch.context() as mp:
-            mp.setattr(tuples, "PROGRAM_MIN_ROWS", minimum)
-            mp.setattr(tuples, "program_pays", lambda *args: True)
-            clear_caches()
-            got[name] = [outcome(batches, "dempster"), outcome(batches[::-1], "dempster")]
+    got = both_ways(monkeypatch, lambda: [outcome(batches, "dempster"), outcome(batches[::-1], "dempster")])
     assert got["program"] == got["reduceat"]
     assert np.isclose(math.fsum(got["program"][0][1][7]), 1.0)
