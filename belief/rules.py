@@ -45,7 +45,8 @@ from belief.rules_r import EMPTY_MODES, R_MODES, check_r_options, inconsistency,
 from belief.rules_common import RESULT_TOLERANCE, Source, prepare_sources, renormalised
 from belief.rules_registry import ALIASES, RULES, RuleFunction, RuleInfo, register_rule
 from belief.singletons import SINGLETON_RULES, combine_singletons, singleton_sources
-from belief.rules_single import PCR_LOOP_TUPLES, SINGLE_CACHE_SIZE, SINGLE_LOOP_TUPLES, combine_single
+from belief.rules_single import (PCR_LOOP_TUPLES, SINGLE_CACHE_SIZE, SINGLE_LOOP_TUPLES, combine_again,
+                                 combine_single)
 from belief.rules_tuples import LOOP_TUPLES, SMALL_PAIR, WIDE_LOOP_TUPLES
 
 __all__ = ["combine", "sequential", "inconsistency", "RULES", "RuleInfo", "get_rule", "register_rule",
@@ -206,10 +207,11 @@ def _many_singletons(info: RuleInfo, sources: Sequence[Source], model: Model | N
 #: ======================  ===========================================================  ======================
 #: family                  sources                                                      kernels
 #: ======================  ===========================================================  ======================
+#: the same sources again  joint PCR5 / PCR6 of mass functions combined before          :mod:`belief.joint_code`
 #: many singletons         single hypotheses under Shafer's model, ≥ 4 096 tuples       :mod:`belief.singletons`
 #: unions of hypotheses    unions of exclusive hypotheses, frames of ≤ 16 hypotheses    :mod:`belief.rules_single`
 #: ======================  ===========================================================  ======================
-SINGLE_FAMILIES = (_many_singletons, combine_single)
+SINGLE_FAMILIES = (combine_again, _many_singletons, combine_single)
 
 
 def sequential(*sources: Source, rule: Union[str, RuleInfo] = "pcr6", model: Model | None = None,

@@ -94,26 +94,36 @@ def combine_single(info: RuleInfo, sources: Sequence[Source], model: Model | Non
                     if count > limits.MAX_TUPLES or 5 * count > limits.MAX_WORK or 24 * count > limits.MAX_BYTES:
                         FoldBudget(info.name, 2).step(len(masks1), len(masks2), 2)      # it says which limit
                     return _pair_arrays(source_model, kind, masks1, a._floats, masks2, b._floats)
-    elif kind in ("pcr6", "pcr5") and len(sources) > 1 and type(sources[0]) is MassFunction:
-        # The same sources again (a tracker, a repeated fusion): their grouping is kept on the first one.
-        first = sources[0]
-        memo = first._memo
-        if type(memo) is _JointTable and memo.plan is not None and memo.rule == kind:
-            source_model = first.model
-            if (len(memo.masks) == len(sources) and (model is None or model is source_model)
-                    and memo.count <= limits.MAX_TUPLES):
-                values = []
-                for m, mk in zip(sources, memo.masks):
-                    if type(m) is not MassFunction or m._masks is not mk or m.model is not source_model:
-                        break
-                    values.append(m._floats or m._union_floats())
-                else:
-                    return memo.combine(source_model, values)
     fused = _single_any(kind, info, sources, model)
     if fused is None:
         return None
     # A pair of a few tuples there is final already; renormalising it again leaves it as it is.
     return renormalised(fused, len(sources[0]) if len(sources) == 1 else len(sources))
+
+
+def combine_again(info: RuleInfo, sources: Sequence[Source], model: Model | None) -> MassFunction | None:
+    """Joint PCR5 / PCR6 of mass functions met before, by the code written for their focal lists; else None.
+
+    The first source remembers its partners' focal lists (:class:`_JointTable`) when they
+    are combined; the same sources again (a tracker, a repeated fusion) then skip the grouping
+    of the tuples, and the result is the loop's to the last bit.
+    """
+    first = sources[0] if sources else None
+    if type(first) is not MassFunction:
+        return None
+    memo = first._memo
+    if type(memo) is not _JointTable or memo.plan is None or memo.rule != _SINGLE_RULES.get(info.function):
+        return None
+    source_model = first.model
+    if (len(memo.masks) != len(sources) or not (model is None or model is source_model)
+            or memo.count > limits.MAX_TUPLES):
+        return None
+    values = []
+    for m, mk in zip(sources, memo.masks):
+        if type(m) is not MassFunction or m._masks is not mk or m.model is not source_model:
+            return None
+        values.append(m._floats or m._union_floats())
+    return memo.combine(source_model, values)
 
 
 def _single_any(kind: str, info: RuleInfo, sources: Sequence[Source], model: Model | None) -> MassFunction | None:
