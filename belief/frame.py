@@ -34,6 +34,8 @@ __all__ = ["Frame", "Element", "reduce_terms", "term_key", "MAX_PROPOSITION_TERM
 MAX_PROPOSITION_TERMS = 100_000
 
 _OPERATOR_CHARS = set("()&|∩∪∅,")
+# str.isspace's characters and the operators (re's \s matches the same Unicode whitespace).
+_RESERVED_CHARACTER = re.compile(r"[\s" + re.escape("".join(sorted(_OPERATOR_CHARS))) + "]")
 #: The live frames by their names (see Frame.__new__).
 _FRAMES: "weakref.WeakValueDictionary[tuple[str, ...], Frame]" = weakref.WeakValueDictionary()
 _RESERVED_NAMES = {"empty", "∅"}
@@ -393,7 +395,10 @@ def _check_name(name: object) -> None:
         raise FrameError("hypothesis names must not be empty")
     if name in _RESERVED_NAMES:
         raise FrameError(f"{name!r} is reserved for the empty element and cannot name a hypothesis")
-    bad = sorted({ch for ch in name if ch.isspace() or ch in _OPERATOR_CHARS})
+    if _RESERVED_CHARACTER.search(name) is None:
+        bad = None
+    else:
+        bad = sorted({ch for ch in name if ch.isspace() or ch in _OPERATOR_CHARS})
     if bad:
         raise FrameError(f"hypothesis name {name!r} contains the reserved character(s) {''.join(bad)!r}")
     if not name.isprintable():

@@ -30,6 +30,8 @@ WORD_BITS = 64
 TUPLE_BLOCK_WORDS = 1 << 20
 #: Below this many masks, :func:`union_terms` loops in Python; above, numpy lists the bits of all at once.
 _VECTOR_TERMS = 256
+#: What listing one set bit in Python costs, in units of numpy's cost of reading one bit of a mask.
+_PYTHON_BIT_COST = 64
 _LITTLE_WORDS = np.dtype("<u8")
 # Odd multipliers of the hash of a row of words (splitmix64's constants).
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
@@ -149,6 +151,9 @@ def union_terms(masks: Sequence[int], width: int) -> list[tuple[int, ...]]:
     if len(masks) < _VECTOR_TERMS:
         return [_terms_of(m) for m in masks]
     words = word_count(width)
+    # numpy reads every bit of every mask, Python only the set ones: few set bits (singletons) go by Python.
+    if _PYTHON_BIT_COST * sum([m.bit_count() for m in masks]) < len(masks) * words * WORD_BITS:
+        return [_terms_of(m) for m in masks]
     powers = _powers(words * WORD_BITS)
     out: list[tuple[int, ...]] = []
     step = max(1, (1 << 22) // (words * WORD_BITS))

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from typing import Any, Union
 
 import numpy as np
@@ -18,7 +18,7 @@ from belief.batch import SUM_TOLERANCE, MassBatch, check_cardinality_range, chec
 from belief.errors import FormatError, InvalidMassError
 from belief.frame import Element, Frame, make_elements
 from belief.model import Model, _show
-from belief.masks import union_key
+from belief.masks import canonical_order, to_words, union_key, word_count
 from belief.plan import RANK_TABLE_WIDTH, union_elements, union_ranks
 from belief.textfiles import load_json
 
@@ -282,11 +282,22 @@ class MassFunction(_MassSlots):
     def _settle(self) -> None:
         """Put loose masks and floats in canonical order (:func:`~belief.plan.union_ranks`, or its key if wider)."""
         n = len(self.model.frame)
-        rank = union_ranks(n)[2] if n <= RANK_TABLE_WIDTH else list(map(union_key(n), self._masks))
-        items = sorted(zip([rank[m] for m in self._masks] if n <= RANK_TABLE_WIDTH else rank, self._masks,
-                           self._floats))
-        object.__setattr__(self, "_masks", tuple([m for _, m, _ in items]))
-        object.__setattr__(self, "_floats", tuple([v for _, _, v in items]))
+        masks, floats = self._masks, self._floats
+        if n > RANK_TABLE_WIDTH and len(masks) > _SORTED_BY_WORDS and all(not m & (m - 1) for m in masks):
+            # Single hypotheses (and ∅): their canonical order is that of their bits.
+            order = sorted(range(len(masks)), key=masks.__getitem__)
+            object.__setattr__(self, "_masks", tuple([masks[i] for i in order]))
+            object.__setattr__(self, "_floats", tuple([floats[i] for i in order]))
+        elif n > RANK_TABLE_WIDTH and len(masks) > _SORTED_BY_WORDS:
+            # Many masks of a wide frame: numpy sorts their words (the key of one mask is a few microseconds).
+            order = canonical_order(to_words(masks, word_count(n))).tolist()
+            object.__setattr__(self, "_masks", tuple([masks[i] for i in order]))
+            object.__setattr__(self, "_floats", tuple([floats[i] for i in order]))
+        else:
+            rank = union_ranks(n)[2] if n <= RANK_TABLE_WIDTH else list(map(union_key(n), masks))
+            items = sorted(zip([rank[m] for m in masks] if n <= RANK_TABLE_WIDTH else rank, masks, floats))
+            object.__setattr__(self, "_masks", tuple([m for _, m, _ in items]))
+            object.__setattr__(self, "_floats", tuple([v for _, _, v in items]))
         object.__setattr__(self, "_loose", False)
 
     @property
@@ -330,6 +341,18 @@ class MassFunction(_MassSlots):
             masks = tuple(out)
             object.__setattr__(self, "_masks", masks)
         return masks
+
+    def _unions_as_held(self) -> tuple[Sequence[int], Sequence[float]] | None:
+        """The focal elements as hypothesis bit masks and their masses, in the order held (maybe not canonical).
+
+        None if they are not held as masks.  Nothing is sorted or made: a reader that does not
+        need the canonical order (a sum, a scatter by position) takes them as they are.
+        """
+        masks = self._masks
+        if masks is None:
+            return None
+        floats = self._floats
+        return masks, (floats if floats is not None else self._union_floats())
 
     def _union_floats(self) -> tuple[float, ...]:
         """The masses as a tuple of floats, in the order of :meth:`_union_masks`."""
@@ -685,20 +708,24 @@ def _spaced_unions(mass: MassFunction, masses: Mapping, model: Model, bit: dict[
 def _union_context(model: Model) -> tuple | bool:
     """What :class:`MassFunction` needs to read unions of hypotheses under a model (kept on it), or False.
 
-    It applies to frames of up to :data:`~belief.plan.RANK_TABLE_WIDTH` hypotheses whose
-    model declares no hypothesis empty on its own (a union of hypotheses is then its own
-    form under the model).
+    It applies to frames whose model declares no hypothesis empty on its own (a union of
+    hypotheses is then its own form under the model).
     """
     frame = model.frame
     n = len(frame)
-    if n > RANK_TABLE_WIDTH or any(f & (f - 1) == 0 for f in model.forbidden):
+    # Shafer's model forbids no hypothesis on its own (and its conjunctions are not listed on wide frames).
+    if model.kind != "shafer" and any(f & (f - 1) == 0 for f in model.forbidden):
         context = False
     else:
-        # The bit of each name, the rank table, and the propositions read so far, by their text.
-        context = (frame._bit.__getitem__, frame._bit, union_ranks(n)[2], {})
+        # The bit of each name, the rank table (none on wide frames: masks are sorted by their key), and the
+        # propositions read so far, by their text.
+        context = (frame._bit.__getitem__, frame._bit, union_ranks(n)[2] if n <= RANK_TABLE_WIDTH else None, {})
     model._unions = context
     return context
 
+
+#: Above this many loose masks of a frame wider than the rank tables, they are put in order by numpy.
+_SORTED_BY_WORDS = 64
 
 #: How many propositions a model remembers the hypothesis masks of (``MassFunction(...)`` reads the others); then it
 #: starts over.

@@ -90,7 +90,8 @@ def combine_single(info: RuleInfo, sources: Sequence[Source], model: Model | Non
                 if count <= SINGLE_LOOP_TUPLES:
                     return _pair_loop(source_model, kind, masks1, a._floats or a._union_floats(), masks2,
                                       b._floats or b._union_floats(), a)
-                if count <= PAIR_ARRAY_TUPLES and a._floats is not None and b._floats is not None:
+                if (count <= PAIR_ARRAY_TUPLES and a._floats is not None and b._floats is not None
+                        and len(source_model.frame) <= RANK_TABLE_WIDTH):
                     if count > limits.MAX_TUPLES or 5 * count > limits.MAX_WORK or 24 * count > limits.MAX_BYTES:
                         FoldBudget(info.name, 2).step(len(masks1), len(masks2), 2)      # it says which limit
                     return _pair_arrays(source_model, kind, masks1, a._floats, masks2, b._floats)

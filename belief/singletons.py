@@ -94,6 +94,22 @@ def singleton_sources(sources: Sequence, model: Model | None) -> list[SingletonS
 
 def _read(m: MassFunction) -> SingletonSource | None:
     """A mass function's singletons (positions in frame order) and its mass on ∅, or None for any other element."""
+    held = m._unions_as_held()
+    if held is not None:
+        # Bit masks, maybe not in canonical order: the kernels scatter by position, so no order is needed.
+        masks, floats = held
+        positions = []
+        masses = []
+        empty = 0.0
+        for mask, mass in zip(masks, floats):
+            if not mask:
+                empty = mass
+            elif mask & (mask - 1):
+                return None
+            else:
+                positions.append(mask.bit_length() - 1)
+                masses.append(mass)
+        return SingletonSource(np.array(positions, dtype=np.intp), np.array(masses, dtype=np.float64), float(empty))
     positions = []
     masses = []
     empty = 0.0

@@ -363,10 +363,27 @@ def test_frames_beyond_the_rank_tables_still_agree():
     model = Model.shafer(frame)
     m1 = MassFunction({"h0|h19": 0.5, "h3|h7|h11": 0.3, "h0|h1|h2|h3": 0.2}, model=model)
     m2 = MassFunction({"h0": 0.4, "h3|h19": 0.4, "h7|h11|h1": 0.2}, model=model)
-    assert m1._masks is None                                   # no rank table: the elements are made at once
+    # No rank table: the masks are held as given, and put in canonical order by their key when read.
+    assert m1._loose and m1.focal == tuple(frame.element(x) for x in ("h0|h19", "h3|h7|h11", "h0|h1|h2|h3"))
     for rule in SINGLE_RULES:
         got = across(("plan", "loop", "arrays", "auto"), [m1, m2], rule)
         assert got["loop"] == got["arrays"] == got["auto"] == got["plan"], rule
+
+
+@pytest.mark.parametrize("singletons", [False, True])
+@pytest.mark.parametrize("width", [300, 20, 64, 65, 130])
+def test_many_unions_of_a_wide_frame_come_out_in_canonical_order(width, singletons):
+    # Past a few dozen masks numpy sorts their words: the order must be Element.sort_key's.
+    rng = np.random.default_rng(width)
+    frame = Frame([f"h{i}" for i in range(width)])
+    names = set()
+    while len(names) < (min(width, 300) if singletons else 300):
+        size = 1 if singletons else int(rng.integers(1, 5))
+        names.add("|".join(f"h{i}" for i in sorted(rng.choice(width, size=size, replace=False).tolist())))
+    masses = dict(zip(sorted(names), rng.dirichlet(np.ones(len(names))).tolist()))
+    m = MassFunction(masses, model=Model.shafer(frame))
+    assert list(m.focal) == sorted(m.focal, key=lambda e: e.sort_key)
+    assert {str(e): v for e, v in m.items()} == masses
 
 
 # -- the same errors ------------------------------------------------------------------------------------------
