@@ -72,7 +72,7 @@ def _print_mass(m: MassFunction, as_json: bool) -> None:
     if as_json:
         _print_json(m.to_dict())
     else:
-        print(_table(["proposition", "mass"], [(str(e), v) for e, v in m.items()]))
+        print(_table(["proposition", "mass"], list(m.to_mapping().items())))
 
 
 def _table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:

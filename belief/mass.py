@@ -120,7 +120,8 @@ class MassFunction(_MassSlots):
                     if masks and len(set(masks)) == len(masks):
                         values = list(masses.values())
                         off = abs(sum(values) - 1.0)
-                        if off <= _SURELY_ONE or off <= _MAYBE_ONE and abs(exact_sum(values) - 1.0) <= SUM_TOLERANCE:
+                        if (off <= _SURELY_ONE and len(values) <= _PLAIN_SUM_COUNT
+                                or off <= _MAYBE_ONE and abs(exact_sum(values) - 1.0) <= SUM_TOLERANCE):
                             if type(self) is MassFunction:
                                 _set(self, "__class__", _FreshMass)
                                 _fill(self, model, masks, values, True)
@@ -460,6 +461,12 @@ class MassFunction(_MassSlots):
 
     def to_mapping(self) -> dict[str, float]:
         """``{proposition string: mass}`` in canonical order."""
+        if self._focal is None and self._masks is not None:
+            masks, floats = self._union_masks(), self._union_floats()
+            if all(m and not m & (m - 1) for m in masks):
+                # Single hypotheses print as their names: no element need be made.
+                names = self.model.frame.hypotheses
+                return {names[m.bit_length() - 1]: v for m, v in zip(masks, floats)}
         return {str(e): v for e, v in zip(self.focal, self.values.tolist())}
 
     def __repr__(self) -> str:
@@ -633,9 +640,10 @@ class MassFunction(_MassSlots):
 MassBatch.row_type = MassFunction       # a row of a batch is a mass function (the engine does not import this module)
 
 _NUMBERS = (int, float, np.integer, np.floating)
-#: Distinct unions of at most RANK_TABLE_WIDTH hypotheses are at most 2**16 positive masses, whose
-#: plain float sum is off their exact sum by less than 1e-11 of it: within this of one, the exact
-#: sum is within SUM_TOLERANCE, and beyond _MAYBE_ONE it is not (math.fsum decides in between).
+#: The plain float sum of at most _PLAIN_SUM_COUNT positive masses is off their exact sum by less
+#: than 2**16 units in the last place (1.5e-11) of it: within _SURELY_ONE of one, the exact sum is
+#: within SUM_TOLERANCE, and beyond _MAYBE_ONE it is not (math.fsum decides in between, and for more masses).
+_PLAIN_SUM_COUNT = 1 << 16
 _SURELY_ONE = SUM_TOLERANCE / 2
 _MAYBE_ONE = 2 * SUM_TOLERANCE
 

@@ -382,7 +382,10 @@ def test_many_unions_of_a_wide_frame_come_out_in_canonical_order(width, singleto
         names.add("|".join(f"h{i}" for i in sorted(rng.choice(width, size=size, replace=False).tolist())))
     masses = dict(zip(sorted(names), rng.dirichlet(np.ones(len(names))).tolist()))
     m = MassFunction(masses, model=Model.shafer(frame))
+    assert m.to_mapping() == masses                 # read before the elements are made
+    assert list(m.to_mapping().values()) == m.values.tolist()
     assert list(m.focal) == sorted(m.focal, key=lambda e: e.sort_key)
+    assert list(m.to_mapping()) == [str(e) for e in m.focal]
     assert {str(e): v for e, v in m.items()} == masses
 
 
