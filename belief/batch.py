@@ -664,7 +664,7 @@ class MassBatch:
         for i, t in enumerate(targets):
             mapping[i, column[t]] = 1.0
         values = weighted_sum(self.values, mapping)
-        return MassBatch._trusted(self.model, tuple(order), values, canonical=True)
+        return trusted_batch(self.model, tuple(order), values, canonical=True)
 
     def discount(self, alpha: float) -> "MassBatch":
         """Shafer discounting with reliability α: m_α(X) = α m(X), m_α(Θ) += 1 - α.
@@ -682,7 +682,7 @@ class MassBatch:
             focal.append(total)
             values = np.hstack([values, np.full((len(self), 1), 1.0 - alpha)])
         order = sorted(range(len(focal)), key=lambda i: focal[i].sort_key)
-        return MassBatch._trusted(self.model, tuple(focal[i] for i in order), values[:, order], canonical=True)
+        return trusted_batch(self.model, tuple(focal[i] for i in order), values[:, order], canonical=True)
 
     def condition(self, given: Query, normalized: bool = True) -> "MassBatch":
         """Dempster conditioning on ``given``: m(C | B) = Σ_{X∩B=C} m(X).
@@ -696,17 +696,17 @@ class MassBatch:
         result = self._regroup(targets)
         if not normalized:
             return result
-        return MassBatch._trusted(result.model, result.focal, result._normal_values(f"conditioning on {named}"),
+        return trusted_batch(result.model, result.focal, result._normal_values(f"conditioning on {named}"),
                                   canonical=result._canonical)._drop_empty()
 
     def _drop_empty(self) -> "MassBatch":
         keep = [i for i, e in enumerate(self.focal) if e.terms]
-        return MassBatch._trusted(self.model, tuple(self.focal[i] for i in keep), self.values[:, keep],
+        return trusted_batch(self.model, tuple(self.focal[i] for i in keep), self.values[:, keep],
                                   canonical=self._canonical)
 
     def normalized(self) -> "MassBatch":
         """Remove the mass of ∅ and rescale each row by 1 - m(∅)."""
-        return MassBatch._trusted(self.model, self.focal, self._normal_values("normalisation"),
+        return trusted_batch(self.model, self.focal, self._normal_values("normalisation"),
                                   canonical=self._canonical)._drop_empty()
 
     def under(self, model: Model) -> "MassBatch":
@@ -716,7 +716,7 @@ class MassBatch:
         empty goes to ∅, so the result may be subnormal (see :meth:`normalized`).
         """
         check_refines(self.model, model)
-        return MassBatch._trusted(model, self.focal, self.values)._regroup(
+        return trusted_batch(model, self.focal, self.values)._regroup(
             [model.reduce(x) for x in self.focal])
 
 
@@ -798,3 +798,14 @@ def _largest_epsilon(cardinality: int) -> float:
         epsilon = math.nextafter(epsilon, 0.0)
     return epsilon
 
+
+def trusted_batch(model: Model, focal: tuple[Element, ...], values: np.ndarray, canonical: bool = False) -> "MassBatch":
+    """A batch of arrays the library computed, wrapped without checks (the package's kernels make their results so).
+
+    ``canonical`` says the focal elements are in canonical order.
+    """
+    obj = object.__new__(MassBatch)
+    values = np.asarray(values, dtype=np.float64)
+    values.flags.writeable = False
+    obj.model, obj.focal, obj.values, obj._canonical, obj._key = model, focal, values, canonical, None
+    return obj

@@ -70,7 +70,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from belief.batch import MassBatch, check_select
+from belief.batch import MassBatch, check_select, trusted_batch
 from belief.bayesian_blocks import Fusion, NoClosedForm
 from belief.bayesian_conjunctive import ConjunctiveFusion, Underflow
 from belief.bayesian_pcr import PCRFusion
@@ -266,7 +266,7 @@ class ClosedFormBatch(MassBatch):
 
     def __reduce__(self):
         result = self.materialised()
-        return (MassBatch._trusted, (result.model, result.focal, result.values, result._canonical))
+        return (trusted_batch, (result.model, result.focal, result.values, result._canonical))
 
     # -- measures ---------------------------------------------------------------------------------
     @property
@@ -384,7 +384,7 @@ def closed_form(rule: str, batches: Sequence[MassBatch], model: Model, options: 
         return function(list(batches), model, **options)
 
     def general(rows: np.ndarray) -> MassBatch:
-        subset = [b if len(b) == 1 else MassBatch._trusted(b.model, b.focal, b.values[rows], canonical=b._canonical)
+        subset = [b if len(b) == 1 else trusted_batch(b.model, b.focal, b.values[rows], canonical=b._canonical)
                   for b in batches]
         return function(subset, model, **options)
 

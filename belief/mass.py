@@ -14,7 +14,8 @@ from typing import Any, Union
 
 import numpy as np
 
-from belief.batch import SUM_TOLERANCE, MassBatch, check_cardinality_range, check_masses, exact_sum, resolve_model
+from belief.batch import (SUM_TOLERANCE, MassBatch, check_cardinality_range, check_masses, exact_sum, resolve_model,
+                          trusted_batch)
 from belief.errors import FormatError, InvalidMassError
 from belief.frame import Element, Frame, make_elements
 from belief.model import Model, _show
@@ -138,7 +139,7 @@ class MassFunction(_MassSlots):
     def _set_unions(self, model: Model, masks: list[int], values: list[float]) -> None:
         """Hold unions of hypotheses in the order given (sorted, as tuples, when first read)."""
         if type(self) is MassFunction:
-            # Plain stores on the twin class (see _from_masks), then back to MassFunction.
+            # Plain stores on the twin class (see mass_from_masks), then back to MassFunction.
             _set(self, "__class__", _FreshMass)
             self.model = model
             self._focal = self._values = self._batch = self._hash = None
@@ -266,18 +267,6 @@ class MassFunction(_MassSlots):
     def _trusted(cls, model: Model, focal: tuple[Element, ...], values) -> "MassFunction":
         obj = object.__new__(cls)
         obj._init(model, focal, values)
-        return obj
-
-    @classmethod
-    def _from_masks(cls, model: Model, masks: tuple[int, ...], values, loose: bool = False) -> "MassFunction":
-        """Wrap unions of hypotheses (bit masks, 0 for ∅) and their masses, without copying.
-
-        ``values`` is a tuple of floats, or a fresh array that nothing else holds.  Without
-        ``loose`` the masks are in canonical order; with it they (lists or tuples, floats
-        only) are sorted when first read.
-        """
-        obj = _new(_FreshMass)
-        _fill(obj, model, masks, values, loose)
         return obj
 
     def _settle(self) -> None:
@@ -488,7 +477,7 @@ class MassFunction(_MassSlots):
     def batch(self) -> MassBatch:
         """This mass function as a one-row :class:`MassBatch`."""
         if self._batch is None:
-            object.__setattr__(self, "_batch", MassBatch._trusted(self.model, self.focal, self.values.reshape(1, -1),
+            object.__setattr__(self, "_batch", trusted_batch(self.model, self.focal, self.values.reshape(1, -1),
                                                                    canonical=True))
         return self._batch  # type: ignore[return-value]
 
@@ -649,7 +638,7 @@ _MAYBE_ONE = 2 * SUM_TOLERANCE
 
 
 class _FreshMass(_MassSlots):
-    """A mass function under construction (see :meth:`MassFunction._from_masks`)."""
+    """A mass function under construction (see :func:`mass_from_masks`)."""
 
     __slots__ = ()
     # Not abstract, so that object.__new__ makes one; it is a MassFunction before anyone sees it.
@@ -661,7 +650,7 @@ _set = object.__setattr__
 
 
 def _fill(obj: _FreshMass, model: Model, masks, values, loose: bool) -> None:
-    """Make ``obj`` the mass function of unions ``masks`` with ``values`` (see :meth:`MassFunction._from_masks`)."""
+    """Make ``obj`` the mass function of unions ``masks`` with ``values`` (see :func:`mass_from_masks`)."""
     # A twin class without MassFunction.__setattr__ takes plain stores (cheaper than
     # object.__setattr__), then the object becomes a MassFunction: both share one layout.
     obj.model = model
@@ -767,4 +756,13 @@ def _key_text(key: Any) -> str:
     return text if len(text) <= 60 and text.isprintable() else _show.repr(text)
 
 
+def mass_from_masks(model: Model, masks, values, loose: bool = False) -> MassFunction:
+    """Wrap unions of hypotheses (bit masks, 0 for ∅) and their masses, without copying or checks.
 
+    The package's kernels make their results so.  ``values`` is a tuple of floats, or a
+    fresh array that nothing else holds.  Without ``loose`` the masks are in canonical
+    order; with it they (lists or tuples, floats only) are sorted when first read.
+    """
+    obj = _new(_FreshMass)
+    _fill(obj, model, masks, values, loose)
+    return obj

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from belief.batch import MassBatch
+from belief.batch import MassBatch, trusted_batch
 from belief.errors import TotalConflictError
 from belief.frame import Element
 from belief.model import Model
@@ -109,7 +109,7 @@ def _wide_dempster(sources: Sequence[MassBatch], model: Model) -> MassBatch:
                                  "Dempster's rule is undefined (try yager, dubois_prade, dsmh or pcr6)")
     scaled = np.ldexp(mantissas, np.maximum(exponents - top[:, None], -1100).astype(np.int32))
     out = scaled / scaled.sum(axis=1)[:, None]
-    return prune(MassBatch._trusted(model, focal, out, canonical=True))
+    return prune(trusted_batch(model, focal, out, canonical=True))
 
 
 @register_rule("disjunctive", summary="disjunctive rule: products go to the union of the focal elements",
@@ -174,7 +174,7 @@ def _move_empty(result: MassBatch, to: Element | None, model: Model, rule: str) 
         scale = kept.sum(axis=1)
         if not (scale > WIDE_SCALE).all():
             return None                         # the non-empty mass may have underflowed: see _wide_dempster
-        return MassBatch._trusted(model, focal[:k] + focal[k + 1:], kept / scale[:, None], canonical=result._canonical)
+        return trusted_batch(model, focal[:k] + focal[k + 1:], kept / scale[:, None], canonical=result._canonical)
     new_focal = list(focal[:k] + focal[k + 1:])
     new_values = np.delete(values, k, axis=1)
     if to in new_focal:
@@ -183,4 +183,4 @@ def _move_empty(result: MassBatch, to: Element | None, model: Model, rule: str) 
         new_focal.append(to)
         new_values = np.hstack([new_values, values[:, k:k + 1]])
     order = sorted(range(len(new_focal)), key=lambda i: new_focal[i].sort_key)
-    return MassBatch._trusted(model, tuple(new_focal[i] for i in order), new_values[:, order], canonical=True)
+    return trusted_batch(model, tuple(new_focal[i] for i in order), new_values[:, order], canonical=True)

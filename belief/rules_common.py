@@ -13,9 +13,9 @@ from typing import Union
 
 import numpy as np
 
-from belief.batch import SUM_TOLERANCE, MassBatch, check_refines
+from belief.batch import SUM_TOLERANCE, MassBatch, check_refines, trusted_batch
 from belief.errors import FrameError, InvalidMassError, ModelError
-from belief.mass import MassFunction
+from belief.mass import MassFunction, mass_from_masks
 from belief.model import Model
 
 __all__ = ["Source", "prepare_sources", "check_same_model", "RESULT_TOLERANCE", "renormalised"]
@@ -90,14 +90,14 @@ def renormalised(result: Source, sources: int) -> Source:
             if not RESULT_TOLERANCE < abs(total - 1.0) <= reach:
                 return result
             if result._masks is not None:
-                return MassFunction._from_masks(result.model, result._masks, tuple([x / total for x in floats]),
+                return mass_from_masks(result.model, result._masks, tuple([x / total for x in floats]),
                                                 result._loose)
         else:
             total = fsum(result.values.tolist())
             if not RESULT_TOLERANCE < abs(total - 1.0) <= reach:
                 return result
             if result._masks is not None:
-                return MassFunction._from_masks(result.model, result._masks, result.values / total)
+                return mass_from_masks(result.model, result._masks, result.values / total)
         return renormalised(result.batch(), sources)[0]
     values = result.values
     if values.shape[0] == 1 and values.shape[1] <= 64:
@@ -109,4 +109,4 @@ def renormalised(result: Source, sources: int) -> Source:
     if not off.any():
         return result
     scale = np.where(off, totals, 1.0)
-    return MassBatch._trusted(result.model, result.focal, values / scale[:, None], canonical=result._canonical)
+    return trusted_batch(result.model, result.focal, values / scale[:, None], canonical=result._canonical)

@@ -11,7 +11,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from belief.batch import MassBatch
+from belief.batch import MassBatch, trusted_batch
 from belief.frame import Element
 from belief.model import Model
 from belief.masks import tuple_codes
@@ -148,7 +148,7 @@ def _add(model: Model, base: MassBatch, elements: Sequence[Element], values: np.
     out = np.zeros((max(len(base), len(values)), len(focal)))
     out[:, [index[base.focal[i]] for i in keep]] += base.values[:, keep]
     out[:, [index[e] for e in elements]] += values
-    return MassBatch._trusted(model, tuple(focal), out, canonical=True)
+    return trusted_batch(model, tuple(focal), out, canonical=True)
 
 
 @lru_cache(maxsize=512)

@@ -23,7 +23,7 @@ import numpy as np
 import belief.plan as limits
 from belief.batch import SUM_TOLERANCE
 from belief.joint_code import pcr_function
-from belief.mass import MassFunction, _set, _union_context
+from belief.mass import MassFunction, _set, _union_context, mass_from_masks
 from belief.model import Model
 from belief.masks import canonical_order, from_words, to_words, tuple_codes, tuple_groups, union_key, word_count
 from belief.plan import (RANK_TABLE_WIDTH, FoldBudget, check_joint, evict, exclusive_hypotheses, union_ranks)
@@ -227,7 +227,7 @@ def _single_any(kind: str, info: RuleInfo, sources: Sequence[Source], model: Mod
         for m in sources:
             least *= min(m._union_floats())
         if least > 0:
-            return MassFunction._from_masks(source_model, focal if type(focal) is tuple else tuple(focal),
+            return mass_from_masks(source_model, focal if type(focal) is tuple else tuple(focal),
                                             row if row.base is None else row.copy())
     return _single_result(source_model, focal, row)
 
@@ -290,8 +290,8 @@ def _pair_loop(model: Model, kind: str, masks1: tuple[int, ...], values1: tuple[
         sums = [x / scale for x in sums]
     if not min(values1) * min(values2) > 0 and not all(x > 0 for x in sums):
         pairs = [(f, x) for f, x in zip(groups, sums) if x > 0]
-        return MassFunction._from_masks(model, [f for f, _ in pairs], [x for _, x in pairs], True)
-    return MassFunction._from_masks(model, list(groups), sums, True)
+        return mass_from_masks(model, [f for f, _ in pairs], [x for _, x in pairs], True)
+    return mass_from_masks(model, list(groups), sums, True)
 
 
 #: What :func:`renormalised` rescales in the result of two sources.
@@ -317,8 +317,8 @@ def _pair_result(model: Model, focal: list, sums: list, normalise: bool, positiv
     # zero is dropped.
     if not positive and not all(x > 0 for x in sums):
         pairs = [(f, x) for f, x in zip(focal, sums) if x > 0]
-        return MassFunction._from_masks(model, [f for f, _ in pairs], [x for _, x in pairs], True)
-    return MassFunction._from_masks(model, focal, sums, True)
+        return mass_from_masks(model, [f for f, _ in pairs], [x for _, x in pairs], True)
+    return mass_from_masks(model, focal, sums, True)
 
 
 def _pair_table(masks1, masks2, key: str) -> tuple:
@@ -385,7 +385,7 @@ def _pair_arrays(model: Model, kind: str, masks1: Sequence[int], values1: Sequen
         focal, sums = focal[1:], kept / scale
     if min(values1) * min(values2) > 0:
         # Every product is positive, and so is every sum: no zero to drop (see _single_any).
-        fused = MassFunction._from_masks(model, focal, sums)
+        fused = mass_from_masks(model, focal, sums)
     else:
         fused = _single_result(model, focal, sums)
     # Quotients by their own sum add up to one within a few units in the last place, far inside
@@ -487,7 +487,7 @@ def _pcr_joint_loop(model: Model, rule: str, masks: list, values: list,
         if x > 0:
             focal.append(c)
             sums.append(x)
-    return MassFunction._from_masks(model, tuple(focal), tuple(sums), True)
+    return mass_from_masks(model, tuple(focal), tuple(sums), True)
 
 
 class _JointTable:
@@ -534,21 +534,21 @@ class _JointTable:
         total = fsum(sums)
         if RESULT_TOLERANCE < abs(total - 1.0) <= 2 * len(values) * SUM_TOLERANCE:
             sums = [x / total for x in sums]                        # as renormalised does
-        return MassFunction._from_masks(model, focal, sums, True)
+        return mass_from_masks(model, focal, sums, True)
 
 
 def _single_result(model: Model, focal: list[int], row: list | np.ndarray) -> MassFunction:
     """The mass function of a result row, without its zero masses (as ``MassBatch.__getitem__``)."""
     if type(row) is list:
         if all(x > 0 for x in row):
-            return MassFunction._from_masks(model, tuple(focal), tuple(row))
+            return mass_from_masks(model, tuple(focal), tuple(row))
         pairs = [(f, x) for f, x in zip(focal, row) if x > 0]
-        return MassFunction._from_masks(model, tuple([f for f, _ in pairs]), tuple([x for _, x in pairs]))
+        return mass_from_masks(model, tuple([f for f, _ in pairs]), tuple([x for _, x in pairs]))
     if row.min() > 0:
-        return MassFunction._from_masks(model, focal if type(focal) is tuple else tuple(focal),
+        return mass_from_masks(model, focal if type(focal) is tuple else tuple(focal),
                                         row if row.base is None else row.copy())
     kept = np.flatnonzero(row > 0)
-    return MassFunction._from_masks(model, tuple([focal[i] for i in kept.tolist()]), row[kept])
+    return mass_from_masks(model, tuple([focal[i] for i in kept.tolist()]), row[kept])
 
 
 def _single_to_total(model: Model, n: int, focal: list[int], row: np.ndarray) -> tuple[list[int], np.ndarray]:

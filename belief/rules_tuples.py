@@ -22,7 +22,7 @@ from operator import add
 import numpy as np
 
 import belief.plan as limits
-from belief.batch import MassBatch
+from belief.batch import MassBatch, trusted_batch
 from belief.errors import InvalidMassError, ModelError
 from belief.frame import Element
 from belief.model import Model
@@ -253,7 +253,7 @@ def _loop_targets(batches: Sequence[MassBatch], model: Model, key: str, direct: 
                       [first[c][0] for c in unique], [first[c][1] for c in unique])
     order = _canonical(direct, elements)
     values = np.array([[segment_sum(groups[unique[k]]) for k in order]])
-    return MassBatch._trusted(model, tuple(elements[k] for k in order), values, canonical=True)
+    return trusted_batch(model, tuple(elements[k] for k in order), values, canonical=True)
 
 
 def _array_targets(batches: Sequence[MassBatch], model: Model, key: str, direct: Direct,
@@ -305,12 +305,12 @@ def _scatter_products(batches: Sequence[MassBatch], model: Model, scatter: Scatt
             if skip:
                 rows = kernel.evaluate_normalised(values, DEMPSTER_SMALLEST_SCALE)
                 if rows is not None:
-                    return MassBatch._trusted(model, scatter.elements[1:], rows, canonical=True)
-            return MassBatch._trusted(model, scatter.elements, kernel.evaluate(values), canonical=True)
+                    return trusted_batch(model, scatter.elements[1:], rows, canonical=True)
+            return trusted_batch(model, scatter.elements, kernel.evaluate(values), canonical=True)
     out = np.empty((n, len(scatter.elements)))
     for rows in row_chunks(n, count):
         out[rows] = scatter.apply(gather_product([v[rows] for v in values], columns))
-    return MassBatch._trusted(model, scatter.elements, out, canonical=True)
+    return trusted_batch(model, scatter.elements, out, canonical=True)
 
 
 @lru_cache(maxsize=512)
@@ -360,7 +360,7 @@ def prune(batch: MassBatch) -> MassBatch:
     live = np.flatnonzero((batch.values != 0).any(axis=0))
     if live.size == len(batch.focal):
         return batch
-    return MassBatch._trusted(batch.model, tuple(batch.focal[i] for i in live.tolist()), batch.values[:, live],
+    return trusted_batch(batch.model, tuple(batch.focal[i] for i in live.tolist()), batch.values[:, live],
                               canonical=batch._canonical)
 
 

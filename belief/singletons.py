@@ -36,7 +36,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from belief.bayesian_blocks import sums_of_the_others
-from belief.mass import MassFunction
+from belief.mass import MassFunction, mass_from_masks
 from belief.model import Model
 from belief.rules_classic import WIDE_SCALE, conjunctive, dempster, dsmc, yager
 from belief.rules_pcr import pcr5, pcr6
@@ -265,4 +265,4 @@ def _singleton_result(model: Model, used: np.ndarray, values: np.ndarray, empty:
     if empty:
         masks.insert(0, 0)
         masses = np.insert(masses, 0, empty)
-    return MassFunction._from_masks(model, tuple(masks), np.ascontiguousarray(masses, dtype=np.float64))
+    return mass_from_masks(model, tuple(masks), np.ascontiguousarray(masses, dtype=np.float64))
