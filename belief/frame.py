@@ -156,7 +156,7 @@ class Frame:
     3
     """
 
-    __slots__ = ("_names", "_index", "_hash", "_bit", "_singletons", "__weakref__")
+    __slots__ = ("_names", "_index", "_hash", "_bit", "_singletons", "_by_identity", "__weakref__")
 
     def __new__(cls, hypotheses: Sequence[str]) -> "Frame":
         # Frames of the same names are one object while any is alive: elements, mass functions and the
@@ -206,6 +206,7 @@ class Frame:
         self._bit = {name: 1 << i for i, name in enumerate(names)}
         self._hash = hash(("belief.Frame", names))
         self._singletons = None
+        self._by_identity = None
         if type(self) is Frame:
             _FRAMES[names] = self
 
@@ -290,6 +291,23 @@ class Frame:
             # Made once per frame: over thousands of hypotheses, each mask is an integer of thousands of bits.
             singletons = self._singletons = tuple([_make(self, (bit,)) for bit in self._bit.values()])
         return singletons
+
+    def singleton_of_bit(self, mask: int) -> "Element | None":
+        """The singleton whose hypothesis bit is this very ``int`` object (``frame.bits[name]``), else None.
+
+        A look-up by identity costs the same on every frame; one by value hashes an integer
+        of n bits.  A mask equal to a hypothesis bit but made otherwise gives None.
+        """
+        table = self._by_identity
+        if table is None:
+            table = self._by_identity = {id(e.terms[0]): e for e in self.singletons}
+        element = table.get(id(mask))
+        return element if element is not None and element.terms[0] is mask else None
+
+    @property
+    def bits(self) -> tuple[int, ...]:
+        """The bit mask of each hypothesis, in frame order (the objects a parsed name maps to)."""
+        return tuple(self._bit.values())
 
     def conjunction(self, names: Iterable[str]) -> "Element":
         """The intersection of the named hypotheses.

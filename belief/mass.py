@@ -109,10 +109,13 @@ class MassFunction(_MassSlots):
                     mask = known(key)
                     if mask is None:
                         parts = key.split("|")
-                        mask = sum(map(get, parts))
-                        # Without carries (each name once) the mask has a bit per name.
-                        if mask.bit_count() != len(parts):
-                            break
+                        if len(parts) == 1:
+                            mask = get(key)             # the frame's own bit (found by identity when read)
+                        else:
+                            mask = sum(map(get, parts))
+                            # Without carries (each name once) the mask has a bit per name.
+                            if mask.bit_count() != len(parts):
+                                break
                         if len(parsed) >= PARSE_CACHE_SIZE:
                             parsed.clear()
                         parsed[key] = mask
@@ -273,9 +276,10 @@ class MassFunction(_MassSlots):
         """Put loose masks and floats in canonical order (:func:`~belief.plan.union_ranks`, or its key if wider)."""
         n = len(self.model.frame)
         masks, floats = self._masks, self._floats
-        if n > RANK_TABLE_WIDTH and len(masks) > _SORTED_BY_WORDS and all(not m & (m - 1) for m in masks):
-            # Single hypotheses (and ∅): their canonical order is that of their bits.
-            order = sorted(range(len(masks)), key=masks.__getitem__)
+        singleton = self.model.frame.singleton_of_bit
+        if n > RANK_TABLE_WIDTH and len(masks) > _SORTED_BY_WORDS and all(singleton(m) is not None for m in masks):
+            # The frame's own bits: their canonical order is that of the hypotheses.
+            order = sorted(range(len(masks)), key=lambda i: masks[i].bit_length())
             object.__setattr__(self, "_masks", tuple([masks[i] for i in order]))
             object.__setattr__(self, "_floats", tuple([floats[i] for i in order]))
         elif n > RANK_TABLE_WIDTH and len(masks) > _SORTED_BY_WORDS:

@@ -534,7 +534,14 @@ def union_elements(frame: Frame, masks: Sequence[int]) -> list[Element]:
     same few unions come back in every mass function read, and elements are immutable.
     """
     if len(frame) > RANK_TABLE_WIDTH:
-        return make_elements(frame, union_terms(masks, len(frame)))
+        # Single hypotheses parsed from their names are the frame's own bits: found by identity, not made.
+        singleton = frame.singleton_of_bit
+        found = [singleton(m) for m in masks]
+        if None not in found:
+            return found
+        missing = [m for m, e in zip(masks, found) if e is None]
+        made = iter(make_elements(frame, union_terms(missing, len(frame))))
+        return [e if e is not None else next(made) for e in found]
     known = _ELEMENTS.get(frame)
     if known is None:
         if len(_ELEMENTS) >= ELEMENT_CACHE_FRAMES:

@@ -252,7 +252,8 @@ def _singleton_result(model: Model, used: np.ndarray, values: np.ndarray, empty:
     """The mass function of the non-zero singleton masses, ∅ first and Θ last where they hold mass."""
     live = values > 0
     positions = used[live].tolist()
-    masks = [1 << p for p in positions]
+    bits = model.frame.bits
+    masks = [bits[p] for p in positions]            # the frame's own bits: read by identity (Frame.singleton_of_bit)
     masses = values[live]
     n = len(model.frame)
     if on_total > 0.0:

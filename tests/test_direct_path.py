@@ -560,3 +560,16 @@ def test_elements_made_by_the_factory_are_ordinary_elements():
     with pytest.raises(AttributeError):
         made.__class__ = Element
     assert pickle.loads(pickle.dumps(made)) == made
+
+
+def test_single_hypotheses_of_a_wide_frame_are_the_frames_own_elements():
+    # Found by identity (an integer of n bits hashes in O(n)); a mask equal to a bit but made otherwise is made.
+    frame = Frame([f"h{i}" for i in range(100)])
+    m = MassFunction({"h70": 0.25, "h7": 0.5, "h3|h99": 0.25}, model=Model.shafer(frame))
+    focal = m.focal
+    assert focal[0] is frame.singletons[7] and focal[1] is frame.singletons[70]
+    assert str(focal[2]) == "h3|h99"
+    assert frame.singleton_of_bit(frame.bits[70]) is frame.singletons[70]
+    assert frame.singleton_of_bit(1 << 70) is None                     # equal, not the same object
+    made = MassFunction({"h70": 0.5, "h7": 0.5}, model=Model.shafer(frame))
+    assert combine(made, made, rule="dempster").focal == (frame.singletons[7], frame.singletons[70])
