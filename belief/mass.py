@@ -276,12 +276,17 @@ class MassFunction(_MassSlots):
         """Put loose masks and floats in canonical order (:func:`~belief.plan.union_ranks`, or its key if wider)."""
         n = len(self.model.frame)
         masks, floats = self._masks, self._floats
-        singleton = self.model.frame.singleton_of_bit
-        if n > RANK_TABLE_WIDTH and len(masks) > _SORTED_BY_WORDS and all(singleton(m) is not None for m in masks):
-            # The frame's own bits: their canonical order is that of the hypotheses.
+        elements = None
+        if n > RANK_TABLE_WIDTH and len(masks) > _SORTED_BY_WORDS:
+            elements = list(map(self.model.frame.singleton_of_bit, masks))
+            if None in elements:
+                elements = None
+        if elements is not None:
+            # The frame's own bits: their canonical order is that of the hypotheses, their elements the frame's.
             order = sorted(range(len(masks)), key=lambda i: masks[i].bit_length())
             object.__setattr__(self, "_masks", tuple([masks[i] for i in order]))
             object.__setattr__(self, "_floats", tuple([floats[i] for i in order]))
+            object.__setattr__(self, "_focal", tuple([elements[i] for i in order]))
         elif n > RANK_TABLE_WIDTH and len(masks) > _SORTED_BY_WORDS:
             # Many masks of a wide frame: numpy sorts their words (the key of one mask is a few microseconds).
             order = canonical_order(to_words(masks, word_count(n))).tolist()
@@ -300,9 +305,11 @@ class MassFunction(_MassSlots):
         focal = self._focal
         if focal is None:
             if self._loose:
-                self._settle()
-            focal = tuple(union_elements(self.model.frame, self._masks))
-            object.__setattr__(self, "_focal", focal)
+                self._settle()                  # which may find the elements
+            focal = self._focal
+            if focal is None:
+                focal = tuple(union_elements(self.model.frame, self._masks))
+                object.__setattr__(self, "_focal", focal)
         return focal
 
     @property
