@@ -23,7 +23,7 @@ from itertools import islice
 import numpy as np
 
 __all__ = ["WORD_BITS", "word_count", "to_words", "from_words", "canonical_order", "union_key", "union_terms",
-           "tuple_codes", "tuple_groups", "TUPLE_BLOCK_WORDS"]
+           "single_terms", "tuple_codes", "tuple_groups", "TUPLE_BLOCK_WORDS"]
 
 WORD_BITS = 64
 #: Tuples are combined in blocks of about this many words (8 bytes each).
@@ -124,7 +124,12 @@ def union_key(width: int, rank: Sequence[int] | None = None) -> Callable[[int], 
     return key
 
 
-def _terms_of(mask: int) -> tuple[int, ...]:
+def single_terms(mask: int) -> tuple[int, ...]:
+    """The single-hypothesis conjunctions of a hypothesis mask, in frame order.
+
+    >>> single_terms(0b1011)
+    (1, 2, 8)
+    """
     terms = []
     while mask:
         low = mask & -mask
@@ -149,11 +154,11 @@ def union_terms(masks: Sequence[int], width: int) -> list[tuple[int, ...]]:
     [(1, 2, 8), ()]
     """
     if len(masks) < _VECTOR_TERMS:
-        return [_terms_of(m) for m in masks]
+        return [single_terms(m) for m in masks]
     words = word_count(width)
     # numpy reads every bit of every mask, Python only the set ones: few set bits (singletons) go by Python.
     if _PYTHON_BIT_COST * sum([m.bit_count() for m in masks]) < len(masks) * words * WORD_BITS:
-        return [_terms_of(m) for m in masks]
+        return [single_terms(m) for m in masks]
     powers = _powers(words * WORD_BITS)
     out: list[tuple[int, ...]] = []
     step = max(1, (1 << 22) // (words * WORD_BITS))

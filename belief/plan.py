@@ -31,7 +31,8 @@ import numpy as np
 
 from belief.errors import CombinationTooLargeError
 from belief.frame import Element, Frame, make_elements
-from belief.masks import canonical_order, from_words, to_words, tuple_codes, tuple_groups, union_terms, word_count
+from belief.masks import (canonical_order, from_words, single_terms, to_words, tuple_codes, tuple_groups, union_terms,
+                          word_count)
 from belief.model import Model
 
 __all__ = ["TuplePlan", "Scatter", "FocalKey", "tuple_plan", "MAX_TUPLES", "MAX_WORK", "MAX_BYTES",
@@ -485,12 +486,7 @@ def mask_terms(mask: int) -> tuple[int, ...]:
     >>> mask_terms(0b1011)
     (1, 2, 8)
     """
-    terms = []
-    while mask:
-        low = mask & -mask
-        terms.append(low)
-        mask ^= low
-    return tuple(terms)
+    return single_terms(mask)
 
 
 @lru_cache(maxsize=None)
