@@ -1,7 +1,8 @@
 """One fold of the R-weighted rule (SPEC A.4) with a Bayesian cue, by element class.
 
 :class:`RState` is a running result by element class, :class:`Fold` what one fold with a cue shares out;
-:func:`pair_sums` and :func:`low_pairs` give the shares of the pairs of targets, which do not factorise.
+:func:`pair_sums` and :func:`low_pairs` give the shares of the pairs of targets, which do not factorise, and
+:func:`wide_pair_shares` those of the rows whose m0 weights lie below the normal doubles.
 """
 
 from __future__ import annotations
@@ -12,10 +13,13 @@ from functools import cached_property
 import numpy as np
 
 from belief.bayesian_blocks import TINY, share_of
+from belief.rules_classic import _split
 
 #: Pair weights above this (a normal number) have a finite, exact 1 / (x_i + x_l) whose products
 #: with masses (≤ 1), and sums of fewer than 10¹⁷ of those, stay finite.
 RECIPROCAL_FLOOR = 2.0 ** -960
+#: The smallest normal double: an m0 weight below it has lost bits or underflowed (:meth:`Fold._widen`).
+NORMAL_FLOOR = float(np.finfo(np.float64).tiny)
 
 
 def all_above(values: np.ndarray, floor: float) -> bool:
@@ -73,6 +77,13 @@ class Fold:
     and fourth pair; the third and fifth depend on each m(θ_S), and their rows are
     ``flagged`` for the general path.  Terms of classes that are still empty (the first
     fold starts from a Bayesian source) are skipped.
+
+    Only ratios of the weights of one pair matter (SPEC A.4), so the rows with a weight
+    below the normal doubles, whose product w has lost bits or underflowed to 0, are
+    listed in :attr:`wide` and their weights kept as mantissa × 2^exponent
+    (:meth:`_widen`); each pair's weights are scaled to the larger before their ratio is
+    taken (:func:`scaled`), and SPEC A.4's fallback applies only where a weight has a zero
+    factor.
     """
 
     def __init__(self, state: RState, p: np.ndarray, p_f: np.ndarray, r_rho: tuple[np.ndarray, np.ndarray],
@@ -94,13 +105,23 @@ class Fold:
             self.w_f = (f + self.u_total + state.v) * p_f
         self.k_f = s * p_f                                     # k of θ_i against F
         self.k_f += f * p
+        self.wide = np.zeros(0, dtype=np.intp)                 # rows whose weights need exponents
+        if not (all_above(self.w, NORMAL_FLOOR) and all_above(self.w_f, NORMAL_FLOOR)):
+            self._widen(p, p_f)
+        wide = self.wide
         both = self.w + self.w_f
-        floor = all_above(both, RECIPROCAL_FLOOR)
+        if wide.size:
+            # The pairs θ_i, F of those rows: both weights scaled to the larger of the two.
+            m, e, m_f, e_f = self._exponents
+            top = np.maximum(e, e_f)
+            x, x_f = scaled(m, e, top), scaled(m_f, e_f, top)
+            both[:, wide] = x + x_f
+        floor = not wide.size and all_above(both, RECIPROCAL_FLOOR)
         self.complete = complete = floor or bool(both.all())   # m0 weighs every pair θ_i, F
         if not complete:
             lost = ~(both > 0)
             both[lost] = 1.0                                # w = w_F = 0 there: their shares are 0
-            floor = all_above(both, RECIPROCAL_FLOOR)
+            floor = not wide.size and all_above(both, RECIPROCAL_FLOOR)
         self._both, self._inverse = both, floor
         if floor:
             inverse = np.divide(1.0, both, out=both)        # 1 / (w_i + w_F), one division for both shares
@@ -109,6 +130,9 @@ class Fold:
             # Weights of 1e-300 and below (masses whose products underflow): the shares, at most
             # 1, are formed directly, where 1 / (w_i + w_F) would overflow.
             self.to_target = self.w / both
+        if wide.size:
+            self.to_target[:, wide] = x / both[:, wide]
+            self._wide_to_f = x_f / both[:, wide]
         if not state.no_v:
             # θ_S ∪ F against θ_l: θ_l gets p_l w_l/(w_F + w_l), θ_S ∪ F keeps Σ_l p_l w_F/(w_F + w_l).
             self.to_l = p * self.to_target
@@ -135,8 +159,11 @@ class Fold:
         self.pair_rows = np.zeros(0, dtype=np.int64)
         self.w_floor = False                                    # every w_i above the reciprocal floor
         if not fresh:
-            self.half = 0.5 * (self.w_f > 0)
-            self.flagged = (state.q > 0) & (p_f > 0) & ~(self.w_f > 0)
+            f_weighed = self.w_f > 0
+            if wide.size:
+                f_weighed[wide] = self._exponents[2] > 0
+            self.half = 0.5 * f_weighed
+            self.flagged = (state.q > 0) & (p_f > 0) & ~f_weighed
             if not state.no_v and not complete:
                 self.flagged |= (state.v > 0) & (lost & (p > 0)).any(axis=0)
             least = self.w.min() if self.w.size else 1.0
@@ -147,15 +174,43 @@ class Fold:
             else:
                 self.zero_w = p > 0
                 self.zero_w &= ~(self.w > 0)
+                if wide.size:
+                    self.zero_w[:, wide] &= ~(self._exponents[0] > 0)
                 self.some_zero_w = self.zero_w.any(axis=0)
                 self.pair_rows = np.flatnonzero(self.some_zero_w & (self.u_total > 0))
+
+    def _widen(self, p: np.ndarray, p_f: np.ndarray) -> None:
+        """List in :attr:`wide` the rows with an m0 weight (W (12)) below the normal doubles; keep theirs exactly.
+
+        Such a weight w_i = (s_i + u_i) p_i or w_F = (f + U + V) p_F, both factors positive, has
+        lost bits or underflowed to 0 as a double; as the mantissa × 2^exponent of its factors'
+        product (``_exponents``: mantissas and exponents of w_i, (|O|, R), and of w_F, (R,)) it
+        keeps every bit, and only a zero factor makes it 0.
+        """
+        state = self.state
+        low = self.w < NORMAL_FLOOR
+        low &= p > 0
+        low_f = (self.w_f < NORMAL_FLOOR) & (p_f > 0)
+        rows = np.flatnonzero(low.any(axis=0) | low_f)
+        if not rows.size:
+            return
+        a, a_f = state.s[:, rows], state.f[rows]
+        if not state.fresh:
+            a = a + state.u[:, rows]
+            a_f = a_f + self.u_total[rows] + state.v[rows]
+        keep = (low[:, rows] & (a > 0)).any(axis=0) | (low_f[rows] & (a_f > 0))
+        if not keep.all():
+            rows, a, a_f = rows[keep], a[:, keep], a_f[keep]
+        self.wide = rows
+        self._exponents = (*_product_split(a, p[:, rows]), *_product_split(a_f, p_f[rows]))
 
     @cached_property
     def to_f(self) -> np.ndarray:
         """w_F / (w_i + w_F): F's part of the pairs θ_i, F (formed only where a fold needs it whole)."""
-        if self._inverse:
-            return self.w_f * self._both
-        return self.w_f / self._both
+        out = self.w_f * self._both if self._inverse else self.w_f / self._both
+        if self.wide.size:
+            out[:, self.wide] = self._wide_to_f
+        return out
 
     @property
     def except_p(self) -> np.ndarray:
@@ -268,6 +323,9 @@ class Fold:
         st, p, k_f, rho, r = self.state, self.p, self.k_f, self.rho, self.r
         s = st.s
         to_singles = _pair_shares(s, p, self.w)
+        if self.wide.size:
+            rows = self.wide
+            to_singles[:, rows] = wide_pair_shares(s[:, rows], p[:, rows], *self._exponents[:2])
         to_singles += k_f * self.to_target
         to_unions = None if self.to_union is None else k_f * self.to_union
         if positions is None:
@@ -338,16 +396,19 @@ class Fold:
             h.reshape(-1)[flat] = 0.0
             to_single = w_j * (s_j * _dot(p, h) + p_j * _dot(s, h))
         else:
-            k = s_j * p
-            k += p_j * s
-            lost = ~(both > 0) & (k > 0)
-            share = share_of(np.broadcast_to(w_j, both.shape), both)
-            if lost.any():
-                hyp, cols = np.nonzero(lost)
-                g_b = s_j[cols] + p_j[cols]
-                share[hyp, cols] = g_b / (g_b + s[hyp, cols] + p[hyp, cols])
-            share.reshape(-1)[flat] = 0.0
-            to_single = _dot(k, share)
+            to_single = _own_pair_shares(s_j, p_j, w_j, both, s, p, j)
+        plain = w_j > 0
+        wide = self.wide
+        if wide.size:
+            # Those rows' pairs θ_J, θ_l again, each pair's weights scaled to the larger.
+            m, e = self._exponents[:2]
+            own, cols = j[wide], np.arange(wide.size)
+            m_j, e_j = m[own, cols], e[own, cols]
+            top = np.maximum(e, e_j)
+            x_j = scaled(m_j, e_j, top)
+            to_single[wide] = _own_pair_shares(s_j[wide], p_j[wide], x_j, x_j + scaled(m, e, top),
+                                               s[:, wide], p[:, wide], own)
+            plain[wide] = m_j > 0
         k_f = pick(self.k_f)
         to_single += k_f * pick(self.to_target)
         to_union = np.zeros(n) if self.to_union is None else k_f * pick(self.to_union)
@@ -361,7 +422,6 @@ class Fold:
             u = st.u
             u_j = pick(u)
             except_u = self.u_total - u_j
-            plain = w_j > 0
             to_single += p_j * except_u * plain
             bare = ~plain & (p_j > 0) & (except_u > 0)
             if bare.any():
@@ -420,6 +480,71 @@ class Fold:
         shares = share_of(np.broadcast_to(u[None], denominator.shape), denominator)
         shares *= counted
         return u * np.einsum("ijn,in->jn", shares, self.p[:, rows])
+
+
+def _product_split(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """a·b as mantissas in [¼, 1) (0 where a factor is 0) and int64 exponents: no bit lost to underflow."""
+    m_a, e_a = _split(a)
+    m_b, e_b = _split(b)
+    m_a *= m_b
+    e_a += e_b
+    return m_a, e_a
+
+
+def scaled(mantissas: np.ndarray, exponents: np.ndarray, top: np.ndarray) -> np.ndarray:
+    """mantissa × 2^(exponent − top): a pair's weights over a common power of two (``top``, the larger).
+
+    The larger becomes at least ¼; a weight 2^-1100 or more below it, whose share of the
+    pair is below every double's rounding, becomes 0 (as does a zero weight, whose
+    exponent :func:`~belief.rules_classic._split` sets far below any real one).
+    """
+    return np.ldexp(mantissas, np.maximum(exponents - top, -1100).astype(np.int32))
+
+
+def wide_pair_shares(s: np.ndarray, p: np.ndarray, mantissas: np.ndarray, exponents: np.ndarray) -> np.ndarray:
+    """:func:`_pair_shares` of weights given as mantissa × 2^exponent (:meth:`Fold._widen`); shape (|O|, R).
+
+    Σ_{l≠i} k_il w_i / (w_i + w_l) (W (12), (12′)), each pair's two weights scaled to the
+    larger (:func:`scaled`) before the ratio, so that weights below the normal doubles keep
+    their ratio; a pair whose weights are both exactly 0 is split by support σ = s + p
+    (SPEC A.4).  The pairs (i, i + d) of one offset d are formed together.
+    """
+    o, n = s.shape
+    out = np.zeros((o, n))
+    for d in range(1, o):
+        m = o - d
+        top = np.maximum(exponents[:m], exponents[d:])
+        x_a, x_b = scaled(mantissas[:m], exponents[:m], top), scaled(mantissas[d:], exponents[d:], top)
+        k = s[:m] * p[d:]
+        k += s[d:] * p[:m]
+        total = x_a + x_b
+        none = ~(total > 0)
+        if none.any():
+            sigma_a, sigma_b = s[:m] + p[:m], s[d:] + p[d:]
+            x_a, x_b = np.where(none, sigma_a, x_a), np.where(none, sigma_b, x_b)
+            total = np.maximum(x_a + x_b, TINY)             # 0 / 0 where k = 0 too
+        out[:m] += k * (x_a / total)                        # the ratio first: σ may be subnormal
+        out[d:] += k * (x_b / total)
+    return out
+
+
+def _own_pair_shares(s_j: np.ndarray, p_j: np.ndarray, x_j: np.ndarray, both: np.ndarray, s: np.ndarray,
+                     p: np.ndarray, own: np.ndarray) -> np.ndarray:
+    """Σ_{l≠J} k_Jl x_J / (x_J + x_l), k_Jl = s_J p_l + p_J s_l, for J = own[n] (W (12), (12′)); shape (B,).
+
+    One J per row; ``both`` holds x_J + x_l, (|O|, B).  Where both weights are exactly 0 the pair is split by
+    support σ_J : σ_l, σ = s + p (SPEC A.4).
+    """
+    k = s_j * p
+    k += p_j * s
+    lost = ~(both > 0) & (k > 0)
+    share = share_of(np.broadcast_to(x_j, both.shape), both)
+    if lost.any():
+        hyp, cols = np.nonzero(lost)
+        g_b = s_j[cols] + p_j[cols]
+        share[hyp, cols] = g_b / (g_b + s[hyp, cols] + p[hyp, cols])
+    share[own, np.arange(own.size)] = 0.0              # no pair of θ_J with itself
+    return _dot(k, share)
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -18,6 +18,7 @@ from belief.frame import Element
 from belief.model import Model
 from belief.plan import FoldBudget, Scatter, TuplePlan, gather_product, row_chunks
 from belief.r_inconsistency import aligned_inconsistency, bayesian_inconsistency
+from belief.rules_classic import _ZERO_EXPONENT, _split
 from belief.rules_common import prepare_sources
 from belief.rules_registry import register_rule
 from belief.rules_tuples import broadcast_values, checked_plan, prune, require_kept, require_normal
@@ -299,11 +300,7 @@ def _r_pair_entries(rp: _RPlan, v1: np.ndarray, v2: np.ndarray, model: Model, r_
     r, rho = _aligned_inconsistency(np.take(p1, rp.aligned[0], axis=1), np.take(p2, rp.aligned[1], axis=1),
                                     rp.union_focal, model, r_mode)                       # W (10)
     k = np.add.reduceat(gather_product([v1, v2], rp.conflict), rp.pair_starts, axis=1)   # W (11)
-    if len(rp.projection_starts):
-        m0 = _padded(np.add.reduceat(gather_product([v1, v2], rp.projection), rp.projection_starts, axis=1))
-    else:
-        m0 = np.zeros((n, 1))
-    weights = [np.take(m0, rp.m0_index[:, slot], axis=1) for slot in range(3)]
+    weights = _m0_weights(rp, v1, v2)
     total = weights[0] + weights[1] + weights[2]
     missing = ~(total > 0)
     if missing.any():
@@ -326,3 +323,33 @@ def _r_pair_entries(rp: _RPlan, v1: np.ndarray, v2: np.ndarray, model: Model, r_
     for slot in range(3):
         entries[:, rp.pair_positions[slot + 1]] = share * (weights[slot] / total)        # W (12), (12′), (13)
     return entries
+
+
+def _m0_weights(rp: _RPlan, v1: np.ndarray, v2: np.ndarray) -> list[np.ndarray]:
+    """Each pair's m0 weights of A, B and A ∪ B (W (12)), scaled per pair so that none has underflowed.
+
+    Only the ratios w / Σw of one pair are used (SPEC A.4), so its three weights may share
+    any factor.  The products of masses are kept as mantissa × 2^exponent (as Dempster's rule
+    does where its non-empty mass is tiny), summed by m0 element, and each pair's weights are
+    scaled to the largest of them: a weight of 1e-330, which doubles would round to zero (and
+    the rule then weigh the pair by support), keeps its ratio to the others to the last bits.
+    """
+    n, pairs = v1.shape[0], len(rp.pair_starts)
+    if not len(rp.projection_starts):
+        return [np.zeros((n, pairs)) for _ in range(3)]
+    (c1, c2), starts = rp.projection, rp.projection_starts
+    m1, e1 = _split(np.take(v1, c1, axis=1))
+    m2, e2 = _split(np.take(v2, c2, axis=1))
+    exponent = e1 + e2
+    top = np.maximum.reduceat(exponent, starts, axis=1)
+    runs = np.diff(np.append(starts, exponent.shape[1]))
+    shift = np.maximum(exponent - np.repeat(top, runs, axis=1), -1100).astype(np.int32)
+    mantissas, exponents = _split(np.add.reduceat(np.ldexp(m1 * m2, shift), starts, axis=1))
+    exponents = np.where(mantissas == 0, _ZERO_EXPONENT, exponents + top)
+    # Index P (no m0 element) reads a zero weight.
+    mantissas = np.concatenate([mantissas, np.zeros((n, 1))], axis=1)
+    exponents = np.concatenate([exponents, np.full((n, 1), _ZERO_EXPONENT)], axis=1)
+    slots = [(np.take(mantissas, rp.m0_index[:, slot], axis=1), np.take(exponents, rp.m0_index[:, slot], axis=1))
+             for slot in range(3)]
+    pair_top = np.maximum(np.maximum(slots[0][1], slots[1][1]), slots[2][1])
+    return [np.ldexp(m, np.maximum(e - pair_top, -1100).astype(np.int32)) for m, e in slots]
