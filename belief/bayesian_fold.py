@@ -322,10 +322,7 @@ class Fold:
         """
         st, p, k_f, rho, r = self.state, self.p, self.k_f, self.rho, self.r
         s = st.s
-        to_singles = _pair_shares(s, p, self.w)
-        if self.wide.size:
-            rows = self.wide
-            to_singles[:, rows] = wide_pair_shares(s[:, rows], p[:, rows], *self._exponents[:2])
+        to_singles = _pair_shares(s, p, self.w, (self.wide, *self._exponents[:2]) if self.wide.size else None)
         to_singles += k_f * self.to_target
         to_unions = None if self.to_union is None else k_f * self.to_union
         if positions is None:
@@ -554,17 +551,31 @@ def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.add.reduce(a * b, 0)
 
 
-def _pair_shares(s: np.ndarray, p: np.ndarray, w: np.ndarray) -> np.ndarray:
+def _pair_shares(s: np.ndarray, p: np.ndarray, w: np.ndarray,
+                 wide: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Σ_{l≠i} k_il m0(θ_i) / (m0(θ_i) + m0(θ_l)) for every i, k_il = s_i p_l + s_l p_i (support fallback).
 
     The sum does not factorise: one (|O|, |O|) matrix per row, built by :func:`pair_sums`
     and multiplied by w_i once; the pairs whose weights sum below the floor are then
     corrected by :func:`low_pairs`, where a pair without m0 weight is split by support
     σ_i : σ_l, σ = s + p (SPEC A.4).  Shape (|O|, B).
+
+    ``wide``: the rows of :meth:`Fold._widen` with their weights' mantissas and exponents,
+    whose shares :func:`wide_pair_shares` gives instead.
     """
     out = pair_sums(w, s, p, np.zeros(s.shape))
     out *= w
-    return low_pairs(w, s, p, out)
+    if wide is None:
+        return low_pairs(w, s, p, out)
+    rows, mantissas, exponents = wide
+    # low_pairs costs most where weights underflow, mostly in the wide rows, which are redone anyway.
+    narrow = np.ones(s.shape[1], dtype=bool)
+    narrow[rows] = False
+    if narrow.any():
+        cols = np.flatnonzero(narrow)
+        out[:, cols] = low_pairs(w[:, cols], s[:, cols], p[:, cols], out[:, cols])
+    out[:, rows] = wide_pair_shares(s[:, rows], p[:, rows], mantissas, exponents)
+    return out
 
 
 def pair_sums(weights: np.ndarray, s: np.ndarray, p: np.ndarray, out: np.ndarray) -> np.ndarray:
