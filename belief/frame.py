@@ -398,6 +398,18 @@ class Frame:
         sep = "&" if style == "ascii" else "∩"
         return sep.join(self._names[i] for i in _bits(term))
 
+    def union_name(self, mask: int) -> str:
+        """The text of the union of the hypotheses of a bit mask, as ``str`` of its element gives it.
+
+        >>> Frame(["a", "b", "c"]).union_name(0b101)
+        'a|c'
+        """
+        if not mask:
+            return "empty"
+        if mask.bit_count() == 1:
+            return self._names[mask.bit_length() - 1]
+        return "|".join([self._names[i] for i in _bits(mask)])
+
     def term(self, text: str) -> int:
         """Parse a single conjunction (``a&b``) into its mask."""
         element = self.element(text)
@@ -413,11 +425,8 @@ def _check_name(name: object) -> None:
         raise FrameError("hypothesis names must not be empty")
     if name in _RESERVED_NAMES:
         raise FrameError(f"{name!r} is reserved for the empty element and cannot name a hypothesis")
-    if _RESERVED_CHARACTER.search(name) is None:
-        bad = None
-    else:
+    if _RESERVED_CHARACTER.search(name) is not None:
         bad = sorted({ch for ch in name if ch.isspace() or ch in _OPERATOR_CHARS})
-    if bad:
         raise FrameError(f"hypothesis name {name!r} contains the reserved character(s) {''.join(bad)!r}")
     if not name.isprintable():
         # Control, format (zero-width), private-use and unassigned characters and lone
@@ -619,6 +628,9 @@ class Element(_ElementSlots):
         return joiner.join(self.frame.term_name(t, style) for t in self.terms)
 
     def __str__(self) -> str:
+        terms = self.terms
+        if len(terms) == 1:                     # one conjunction (most often one hypothesis): no join
+            return self.frame.term_name(terms[0])
         return self.format("ascii")
 
     def __repr__(self) -> str:

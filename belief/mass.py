@@ -276,20 +276,15 @@ class MassFunction(_MassSlots):
         """Put loose masks and floats in canonical order (:func:`~belief.plan.union_ranks`, or its key if wider)."""
         n = len(self.model.frame)
         masks, floats = self._masks, self._floats
-        elements = None
         if n > RANK_TABLE_WIDTH and len(masks) > _SORTED_BY_WORDS:
             elements = list(map(self.model.frame.singleton_of_bit, masks))
-            if None in elements:
-                elements = None
-        if elements is not None:
-            # The frame's own bits: their canonical order is that of the hypotheses, their elements the frame's.
-            order = sorted(range(len(masks)), key=lambda i: masks[i].bit_length())
-            object.__setattr__(self, "_masks", tuple([masks[i] for i in order]))
-            object.__setattr__(self, "_floats", tuple([floats[i] for i in order]))
-            object.__setattr__(self, "_focal", tuple([elements[i] for i in order]))
-        elif n > RANK_TABLE_WIDTH and len(masks) > _SORTED_BY_WORDS:
-            # Many masks of a wide frame: numpy sorts their words (the key of one mask is a few microseconds).
-            order = canonical_order(to_words(masks, word_count(n))).tolist()
+            if None not in elements:
+                # The frame's own bits: their canonical order is that of the hypotheses, their elements the frame's.
+                order = sorted(range(len(masks)), key=lambda i: masks[i].bit_length())
+                object.__setattr__(self, "_focal", tuple([elements[i] for i in order]))
+            else:
+                # Many masks of a wide frame: numpy sorts their words (the key of one mask is a few microseconds).
+                order = canonical_order(to_words(masks, word_count(n))).tolist()
             object.__setattr__(self, "_masks", tuple([masks[i] for i in order]))
             object.__setattr__(self, "_floats", tuple([floats[i] for i in order]))
         else:
@@ -462,11 +457,10 @@ class MassFunction(_MassSlots):
     def to_mapping(self) -> dict[str, float]:
         """``{proposition string: mass}`` in canonical order."""
         if self._focal is None and self._masks is not None:
+            # Unions of hypotheses print from their masks: no element need be made.
             masks, floats = self._union_masks(), self._union_floats()
-            if all(m and not m & (m - 1) for m in masks):
-                # Single hypotheses print as their names: no element need be made.
-                names = self.model.frame.hypotheses
-                return {names[m.bit_length() - 1]: v for m, v in zip(masks, floats)}
+            if self._focal is None:
+                return dict(zip(map(self.model.frame.union_name, masks), floats))
         return {str(e): v for e, v in zip(self.focal, self.values.tolist())}
 
     def __repr__(self) -> str:

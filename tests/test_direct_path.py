@@ -573,3 +573,16 @@ def test_single_hypotheses_of_a_wide_frame_are_the_frames_own_elements():
     assert frame.singleton_of_bit(1 << 70) is None                     # equal, not the same object
     made = MassFunction({"h70": 0.5, "h7": 0.5}, model=Model.shafer(frame))
     assert combine(made, made, rule="dempster").focal == (frame.singletons[7], frame.singletons[70])
+
+
+@pytest.mark.parametrize("width", [3, 40])
+def test_to_mapping_from_masks_prints_as_the_elements_do(width):
+    frame = Frame([f"h{i}" for i in range(width)])
+    shafer = Model.shafer(frame)
+    a = MassFunction({"h0|h2": 0.5, "h1": 0.3, "h0|h1|h2": 0.2}, model=shafer)
+    b = MassFunction({"h2": 0.6, "h0|h1": 0.4}, model=shafer)
+    fused = combine(a, b, rule="conjunctive")                  # ∅, single hypotheses and unions
+    printed = fused.to_mapping()                               # before any element is made
+    assert "empty" in printed and "h0|h1" in printed
+    assert printed == {str(e): v for e, v in zip(fused.focal, fused.values.tolist())}
+    assert list(printed) == [str(e) for e in fused.focal]
