@@ -183,24 +183,8 @@ class Frame:
         names = tuple(hypotheses)
         if not names:
             raise FrameError("a frame needs at least one hypothesis")
-        seen: set[str] = set()
-        composed: dict[str, str] | None = None
-        for name in names:
-            _check_name(name)
-            if name in seen:
-                raise FrameError(f"hypothesis {name!r} appears twice in the frame")
-            seen.add(name)
-            if not name.isascii():
-                # Two spellings of one text (composed é and e + combining accent) print alike.
-                if composed is None:
-                    composed = {}
-                key = unicodedata.normalize("NFC", name)
-                other = composed.setdefault(key, name)
-                if other != name:
-                    raise FrameError(
-                        f"hypotheses {other!r} and {name!r} differ only in their Unicode normalisation "
-                        f"({_escaped(other)} and {_escaped(name)}) and would print alike"
-                    )
+        if not _plain_names(names):
+            _check_names(names)
         self._names = names
         self._index = {name: i for i, name in enumerate(names)}
         self._bit = {name: 1 << i for i, name in enumerate(names)}
@@ -416,6 +400,43 @@ class Frame:
         if len(element.terms) != 1:
             raise ParseError(f"{text!r} is not a single conjunction of hypotheses")
         return element.terms[0]
+
+
+def _plain_names(names: tuple) -> bool:
+    """Whether every name is a non-empty, printable ASCII string without reserved characters, none twice.
+
+    Checked on all the names at once: a frame of thousands of hypotheses is then built in
+    a fraction of a millisecond.  Where it is False, :func:`_check_names` finds what is wrong
+    (or that a non-ASCII name is fine).
+    """
+    try:
+        joined = "".join(names)
+    except TypeError:
+        return False
+    return (joined.isascii() and joined.isprintable() and _RESERVED_CHARACTER.search(joined) is None
+            and all(names) and _RESERVED_NAMES.isdisjoint(names) and len(set(names)) == len(names))
+
+
+def _check_names(names: tuple) -> None:
+    """Raise FrameError for the first name that cannot name a hypothesis of a frame, or a name given twice."""
+    seen: set[str] = set()
+    composed: dict[str, str] | None = None
+    for name in names:
+        _check_name(name)
+        if name in seen:
+            raise FrameError(f"hypothesis {name!r} appears twice in the frame")
+        seen.add(name)
+        if not name.isascii():
+            # Two spellings of one text (composed é and e + combining accent) print alike.
+            if composed is None:
+                composed = {}
+            key = unicodedata.normalize("NFC", name)
+            other = composed.setdefault(key, name)
+            if other != name:
+                raise FrameError(
+                    f"hypotheses {other!r} and {name!r} differ only in their Unicode normalisation "
+                    f"({_escaped(other)} and {_escaped(name)}) and would print alike"
+                )
 
 
 def _check_name(name: object) -> None:

@@ -99,26 +99,30 @@ class MassFunction(_MassSlots):
             # else (intersections, element keys, "empty", a name twice, a zero or a bad
             # mass) goes to the slower constructors below, which raise the errors.  The masks
             # of propositions read before are remembered by their text (a bounded dict).
-            get, _, _, parsed = context
+            get, bits, _, parsed = context
+            bit_of = bits.get
             known = parsed.get
             masks = []
             try:
                 for key, value in masses.items():
                     if type(value) is not float or not value > 0.0:
                         break
-                    mask = known(key)
+                    # A hypothesis's name is its frame's own bit (found by identity when read); a union's
+                    # mask is remembered by its text.
+                    mask = bit_of(key)
                     if mask is None:
-                        parts = key.split("|")
-                        if len(parts) == 1:
-                            mask = get(key)             # the frame's own bit (found by identity when read)
-                        else:
+                        mask = known(key)
+                        if mask is None:
+                            parts = key.split("|")
+                            if len(parts) == 1:
+                                break
                             mask = sum(map(get, parts))
                             # Without carries (each name once) the mask has a bit per name.
                             if mask.bit_count() != len(parts):
                                 break
-                        if len(parsed) >= PARSE_CACHE_SIZE:
-                            parsed.clear()
-                        parsed[key] = mask
+                            if len(parsed) >= PARSE_CACHE_SIZE:
+                                parsed.clear()
+                            parsed[key] = mask
                     masks.append(mask)
                 else:
                     if masks and len(set(masks)) == len(masks):

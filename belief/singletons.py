@@ -49,8 +49,8 @@ SINGLETON_KERNEL_TUPLES = 4096
 #: The built-in rules this family evaluates, by function (a rule registered anew under a name keeps its own), and
 #: how: ∩ kind folded, or PCR of two sources.
 SINGLETON_RULES = {conjunctive: "meet", dsmc: "meet", dempster: "dempster", yager: "yager", pcr5: "pcr", pcr6: "pcr"}
-#: Entries of the pair table of PCR at a time: a block of (rows × n) shares (2 MB) stays in the processor's cache.
-PCR_BLOCK_ENTRIES = 1 << 18
+#: Entries of the pair table of PCR at a time: a block of (rows × n) shares (512 kB) stays in the processor's cache.
+PCR_BLOCK_ENTRIES = 1 << 16
 
 
 class SingletonSource:
@@ -168,17 +168,30 @@ def _pcr_pair(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     y = b[live_b]
     column_b = np.full(len(b), -1, dtype=np.intp)
     column_b[live_b] = np.arange(len(live_b))
-    to_a = np.empty(len(x))
-    to_b = np.zeros(len(y))
     # 1 / (a_i + b_j) stays below the largest float when every sum is above 2^-1020: one reciprocal and two
     # products per pair then.  Smaller (subnormal) masses take two quotients per pair, which cannot overflow.
     reciprocal = float(x.min()) + float(y.min()) > 2.0 ** -1020
+    to_a = np.empty(len(x))
+    to_b = _pcr_rows(x, y, live_a, column_b, reciprocal, to_a)
+    out[live_a] += x * (x * to_a)
+    out[live_b] += y * (y * to_b)
+    return out
+
+
+def _pcr_rows(x: np.ndarray, y: np.ndarray, live_a: np.ndarray, column_b: np.ndarray, reciprocal: bool,
+              to_a: np.ndarray) -> np.ndarray:
+    """The pair table of :func:`_pcr_pair`: writes Σ_j b_j / (a_i + b_j) to ``to_a`` and returns Σ_i a_i / (a_i + b_j).
+
+    Shapes: ``x``, ``to_a`` (len(x),); ``y`` and the result (len(y),).  The table is made a
+    block of :data:`PCR_BLOCK_ENTRIES` at a time, which stays in the processor's cache.
+    """
+    to_b = np.zeros(len(y))
     step = max(1, PCR_BLOCK_ENTRIES // len(y))
     for start in range(0, len(x), step):
         rows = slice(start, start + step)
         total = np.add.outer(x[rows], y)                    # a_i + b_j
         if reciprocal:
-            np.reciprocal(total, out=total)
+            np.divide(1.0, total, out=total)                # as np.reciprocal, which numpy does not vectorise
             part_b = part_a = total
         else:
             part_b = np.divide(y, total)                    # b_j / (a_i + b_j)
@@ -195,9 +208,7 @@ def _pcr_pair(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         else:
             to_a[rows] = part_b.sum(axis=1)
             to_b += part_a.sum(axis=0)
-    out[live_a] += x * (x * to_a)
-    out[live_b] += y * (y * to_b)
-    return out
+    return to_b
 
 
 def combine_singletons(kind: str, sources: Sequence[SingletonSource], model: Model) -> MassFunction | None:
