@@ -36,16 +36,19 @@ on a few mass functions.  Each (case, size, rule) runs in a fresh (spawned) proc
 which belief and every peer that implements the case take turns call by call (the first of
 the turn rotates), so that a load that comes and goes on the machine weighs on all of them
 alike.  Each library first makes one untimed call on other inputs (loading lazily
-initialised code), then, after a garbage collection before every timed call:
+initialised code), then:
 
-* cold: the median of 21 calls (5 with --quick), each on focal elements new to the
+* cold: after a garbage collection (which leaves the processor's caches cold, as a first
+  call finds them), the median of 21 calls (5 with --quick), each on focal elements new to the
   process: the call builds the sources from their dicts ({"h1|h3": mass}) and combines
   them, and both are timed (the two parts are printed too).  belief compiles no plan
   for focal elements it meets for the first time (its direct path); its mass functions
   of unions of hypotheses make their elements and arrays when first read, which the
   "focal" column times apart (after the cold call, for information);
-* warm: the median of 21 (5) calls combining the sources of the last cold call again
-  (belief compiles or looks up what it keeps for focal elements that come back).
+* warm: combining the sources of the last cold call again, 21 (5) turns of one untimed call
+  and 5 timed ones in a row, the garbage collected before each turn (not before each call);
+  the median of those calls (belief compiles or looks up what it keeps for focal elements
+  that come back).
 
 A peer stops once its calls took about 4 s (1 s with --quick), after at least one cold
 call; a peer keeps nothing from call to call, and where it ran out of time before the
@@ -341,6 +344,10 @@ class Library:
         return [{k: v for k, v in zip(keys, row) if v != 0.0} for row in result.values[:rows].tolist()]
 
 
+#: Warm calls timed one after another in each turn of (a) and (b), after one untimed repeat.
+WARM_BURST = 5
+
+
 def timed(function, argument) -> tuple[float, object]:
     gc.collect()
     start = time.perf_counter()
@@ -402,12 +409,21 @@ def measure_single(case: str, rule: str, size: int, libraries: list[str], cold: 
             d = data[name]
             if name != "belief" and d["spent"] > budget:
                 continue
+            # Warm: the same call again and again, as a loop over the same sources makes it. The garbage is
+            # collected before the burst, not before each call (a collection walks the whole heap and leaves
+            # the processor's caches cold: that is the cold calls' regime).
             gc.collect()
-            t0 = time.perf_counter()
-            calls[name](d["last"])
-            seconds = time.perf_counter() - t0
-            d["warm"].append(seconds)
-            d["spent"] += seconds
+            gc.disable()
+            try:
+                calls[name](d["last"])
+                for _ in range(WARM_BURST):
+                    t0 = time.perf_counter()
+                    calls[name](d["last"])
+                    seconds = time.perf_counter() - t0
+                    d["warm"].append(seconds)
+                    d["spent"] += seconds
+            finally:
+                gc.enable()
     out = {}
     for name, d in data.items():
         warm_times = d["warm"] or d["combine"]         # a peer keeps nothing from call to call
@@ -850,7 +866,7 @@ def print_report(rows: list[dict], found: list[dict], peers: list[str], sizes: d
         print("    cold = build the sources from dicts of new focal elements + combine (median of "
               f"{sizes['single_cold']}); build, comb. = its two parts;")
         print("    focal = belief's first read of the result's focal elements (made then; not in cold); warm = "
-              f"combine the last sources again (median of {sizes['single_warm']});")
+              f"combine the last sources again (median of {sizes['single_warm']} x {WARM_BURST} calls in a row);")
         print("    x = the fastest peer's time / belief's; a peer's count in brackets = fewer cold calls "
               f"(capped at about {sizes['peer_budget']:g} s)")
         print()
@@ -970,7 +986,7 @@ def main(argv: list[str] | None = None) -> int:
         print("(a), (b): one fresh process per case, the libraries taking turns call by call; cold = build the "
               "sources from dicts")
         print(f"of new focal elements + combine (median of {sizes['single_cold']}), warm = combine them again "
-              f"(median of {sizes['single_warm']}).")
+              f"({sizes['single_warm']} x {WARM_BURST} calls in a row, median).")
         print(f"(c)-(e): a fresh process per library and case; cold = median of {sizes['cold']} calls on focal "
               f"lists new to the process, warm = {sizes['warm']} repeats.")
         print("Peers: median over the same inputs (a count in brackets = fewer calls, capped at about "
