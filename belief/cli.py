@@ -77,15 +77,25 @@ def _print_mass(m: MassFunction, as_json: bool) -> None:
 
 def _table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
     """Rows under a header and a rule, the first column left-aligned and the others right-aligned."""
-    # Column by column: a result of thousands of focal elements prints in milliseconds.
-    columns = [[str(h)] + [_fmt(c) for c in column] for h, column in zip(header, zip(*rows))] if rows else \
+    # Column by column: a result of thousands of focal elements prints in a millisecond.
+    columns = [[str(h)] + _cells(column) for h, column in zip(header, zip(*rows))] if rows else \
         [[str(h)] for h in header]
     widths = [max(map(len, column)) for column in columns]
-    padded = [[c.ljust(widths[0]) for c in columns[0]]] + [[c.rjust(w) for c in column]
-                                                           for column, w in zip(columns[1:], widths[1:])]
-    lines = ["  ".join(parts).rstrip() for parts in zip(*padded)]
+    if len(columns) == 2:                   # a right-aligned last column leaves nothing to strip
+        left, right = widths
+        lines = [a.ljust(left) + "  " + b.rjust(right) for a, b in zip(*columns)]
+    else:
+        padded = [[c.ljust(widths[0]) for c in columns[0]]] + [[c.rjust(w) for c in column]
+                                                               for column, w in zip(columns[1:], widths[1:])]
+        lines = ["  ".join(parts).rstrip() for parts in zip(*padded)]
     lines.insert(1, "  ".join("-" * w for w in widths))
     return "\n".join(lines)
+
+
+def _cells(column: Sequence[Any]) -> list[str]:
+    if all(type(c) is float for c in column):
+        return [f"{c:.6f}" for c in column]
+    return [_fmt(c) for c in column]
 
 
 def _fmt(value: Any) -> str:

@@ -49,8 +49,10 @@ SINGLETON_KERNEL_TUPLES = 4096
 #: The built-in rules this family evaluates, by function (a rule registered anew under a name keeps its own), and
 #: how: ∩ kind folded, or PCR of two sources.
 SINGLETON_RULES = {conjunctive: "meet", dsmc: "meet", dempster: "dempster", yager: "yager", pcr5: "pcr", pcr6: "pcr"}
-#: Entries of the pair table of PCR at a time: a block of (rows × n) shares (512 kB) stays in the processor's cache.
-PCR_BLOCK_ENTRIES = 1 << 16
+#: Entries of the pair table of PCR at a time: a block of (rows × n) shares (1 MB) stays in the processor's cache,
+#: and below the size (460 800 entries) at which OpenBLAS splits a matrix-vector product over threads, which a
+#: busy second core makes twenty times slower.
+PCR_BLOCK_ENTRIES = 1 << 17
 
 
 class SingletonSource:
@@ -187,9 +189,11 @@ def _pcr_rows(x: np.ndarray, y: np.ndarray, live_a: np.ndarray, column_b: np.nda
     """
     to_b = np.zeros(len(y))
     step = max(1, PCR_BLOCK_ENTRIES // len(y))
+    table = np.empty((min(step, len(x)), len(y)))           # one buffer for every block: no page faults
     for start in range(0, len(x), step):
         rows = slice(start, start + step)
-        total = np.add.outer(x[rows], y)                    # a_i + b_j
+        total = table[:len(x[rows])]
+        np.add(x[rows, None], y, out=total)                 # a_i + b_j
         if reciprocal:
             np.divide(1.0, total, out=total)                # as np.reciprocal, which numpy does not vectorise
             part_b = part_a = total
