@@ -44,8 +44,10 @@ With s Bayesian sources m_1, …, m_s, O_i = Σ_{j∈O} m_i(θ_j) and P_O = Π_i
 Every mass is a sum of products of the sources' masses, never ``1 − something``: near
 total conflict (m(∅) = 1 − 10⁻¹⁶) the non-empty masses are tiny, and a difference with
 one would lose them.  The few differences taken (O_i − m_i(θ_j), or Σ_{i≠l} s_i p_l as
-S·T − Σ_i s_i p_i) are between sums of products that all reach non-empty elements, so
-their rounding stays below the non-empty mass itself.  BetP divides by the sum of the
+S·T − Σ_i s_i p_i) are between sums of products that all reach non-empty elements; where
+such a difference would cancel (one target holding nearly all of both masses), the R-weighted
+rule's folds sum the terms one by one instead (:func:`~belief.bayesian_fold.cross_sum`), as its
+error would reach masses far smaller than the difference.  BetP divides by the sum of the
 non-empty masses, exactly as :meth:`~belief.batch.MassBatch.betp` does, so that both paths
 find the same rows totally conflicting.
 

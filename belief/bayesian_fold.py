@@ -265,20 +265,30 @@ class Fold:
         # Σ_i s_i p_i and Σ_i u_i p_i: their sum is Σ_i w_i, the consensus on the singletons.
         sp = self.w.sum(axis=0) if fresh else _dot(st.s, self.p)
         up = None if fresh else _dot(st.u, self.p)
-        if "s" in names or "q" in names:
-            # Σ_{i<l} k_il = Σ_{i≠l} s_i p_l = S t − Σ_i s_i p_i: a difference of sums of target
-            # products, which the fold gives to non-empty elements whatever R (never 1 − m(∅)).
-            pairs = np.maximum(self.s_total * self.t - sp, 0.0)
-            unions = None if fresh else np.maximum(self.u_total * self.t - up, 0.0)    # Σ_i u_i Σ_{l≠i} p_l
+        # The conflicts of θ_i and of θ_i ∪ F with θ_l,
+        # Σ_{i≠l} (s_i + u_i) p_l = Σ_{i<l} k_il + Σ_{i≠l} u_i p_l:
+        # R·k goes to θ_i ∩ θ_l and (1 − R)·k to the singletons, whatever R.  Not (S + U) t − Σ_i w_i
+        # alone (cross_sum): where one target holds nearly all of both masses that cancels, and its
+        # error, roundings of (S + U) t, reaches masses far smaller (m′(F) gets a share of q p_F).
+        weighed_all = fresh or self.zero_w is None
+        if "q" in names or ("s" in names and weighed_all):
+            if fresh:
+                pairs = cross_sum((st.s,), self.p, self.s_total, self.t, sp)
+            else:
+                pairs = cross_sum((st.s, st.u), self.p, self.s_total + self.u_total, self.t, sp + up)
         if "s" in names:
-            to_singles = pairs + _dot(k_f, self.to_target)
+            if weighed_all:
+                to_singles = pairs + _dot(k_f, self.to_target)
+            else:
+                # θ_i ∪ F against θ_l gives θ_l all of (1 − R)·k only where m0 weighs θ_l, and the
+                # rest goes by SPEC A.4's fallback (pair_rows): the other p_l are left out of the
+                # sum, as subtracting their terms would cancel as well.
+                to_singles = cross_sum((st.s,), self.p, self.s_total, self.t, sp)
+                to_singles += cross_terms(st.u, np.where(self.zero_w, 0.0, self.p))
+                to_singles += _dot(k_f, self.to_target)
             if not fresh:
-                # θ_l ∪ F against θ_i: θ_i gets p_i Σ_{l≠i} u_l = U t − Σ u p, where m0 weighs θ_i.
-                to_singles += unions
-                if self.zero_w is not None:
-                    to_singles -= np.where(self.zero_w, self.p * self.except_u, 0.0).sum(axis=0)
-                    if self.pair_rows.size:
-                        to_singles[self.pair_rows] += self._target_fallback(self.pair_rows).sum(axis=0)
+                if self.pair_rows.size:
+                    to_singles[self.pair_rows] += self._target_fallback(self.pair_rows).sum(axis=0)
                 if not st.no_v:
                     to_singles += st.v * self.to_l.sum(axis=0)
             out["s"] = (sp if fresh else sp + up) + rho * to_singles
@@ -296,7 +306,7 @@ class Fold:
         if "q" in names:
             q_new = r * pairs
             if not fresh:
-                q_new += st.q * self.t + r * unions
+                q_new += st.q * self.t
                 if not st.no_v:
                     q_new += r * st.v * self.t
             out["q"] = q_new
@@ -542,6 +552,67 @@ def _own_pair_shares(s_j: np.ndarray, p_j: np.ndarray, x_j: np.ndarray, both: np
         share[hyp, cols] = g_b / (g_b + s[hyp, cols] + p[hyp, cols])
     share[own, np.arange(own.size)] = 0.0              # no pair of θ_J with itself
     return _dot(k, share)
+
+
+def cross_sum(parts: tuple[np.ndarray, ...], b: np.ndarray, a_total: np.ndarray, b_total: np.ndarray,
+              ab: np.ndarray) -> np.ndarray:
+    """Σ_{i≠l} a_i b_l over the hypotheses, a = Σ parts, to a few roundings of itself; shape (B,).
+
+    A·B − Σ_i a_i b_i costs nothing more once the sums are known, but its error is a few
+    roundings of A·B, not of the result: where one hypothesis holds nearly all of both a and
+    b the result is far smaller (a = b = (1, 10⁻⁸) gives 2·10⁻⁸ and kept half its digits).
+    The rows where the difference is below A·B / 2 are summed term by term instead
+    (:func:`cross_terms`); elsewhere it magnifies its operands' roundings at most twice.
+
+    Parameters
+    ----------
+    parts : tuple of numpy.ndarray
+        Non-negative (K, B) arrays whose sum is a (m(θ_i) and m(θ_i ∪ F), say), added only
+        for the rows summed term by term.
+    b : numpy.ndarray
+        Non-negative (K, B).
+    a_total, b_total, ab : numpy.ndarray
+        (B,): A = Σ_i a_i, B = Σ_i b_i and Σ_i a_i b_i, each a sum of non-negative terms.
+
+    Returns
+    -------
+    numpy.ndarray
+        (B,).  A and B err by at most K − 1 roundings and Σ a b by K, so A·B − Σ a b errs by
+        at most about 3K roundings of A·B, which is then at most twice the result: 6K
+        roundings of the result at most, and 2K where summed term by term.
+    """
+    product = a_total * b_total
+    out = product - ab
+    doubtful = np.flatnonzero(~(2.0 * out > product))      # with the rows where it is 0, or rounded below
+    if doubtful.size:
+        if 4 * doubtful.size > out.size:
+            a = parts[0] if len(parts) == 1 else sum(parts[1:], parts[0])
+            return cross_terms(a, b)
+        a = sum((x[:, doubtful] for x in parts[1:]), parts[0][:, doubtful])
+        out[doubtful] = cross_terms(a, b[:, doubtful])
+    return out
+
+
+def cross_terms(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Σ_{i≠l} a_i b_l over the hypotheses of (K, B) arrays, as a sum of non-negative terms; shape (B,).
+
+    Written as Σ_{l<i} (a_i b_l + a_l b_i) = Σ_i (a_i B_{<i} + b_i A_{<i}) with the prefix sums
+    A_{<i} = Σ_{l<i} a_l: O(K) per row, and every operation adds or multiplies non-negative
+    numbers, so the result errs by at most 2K roundings of itself.
+    """
+    k, n = a.shape
+    if k < 2:
+        return np.zeros(n)
+    # The prefix sums one hypothesis at a time: np.cumsum along the short first axis runs
+    # its inner loop down the hypotheses, several times slower than K − 2 additions of rows.
+    before_a, before_b = np.empty((k - 1, n)), np.empty((k - 1, n))
+    before_a[0], before_b[0] = a[0], b[0]
+    for i in range(1, k - 1):
+        np.add(before_a[i - 1], a[i], out=before_a[i])
+        np.add(before_b[i - 1], b[i], out=before_b[i])
+    out = _dot(a[1:], before_b)
+    out += _dot(b[1:], before_a)
+    return out
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
