@@ -18,10 +18,10 @@ from typing import ClassVar, Union
 
 import numpy as np
 
-from belief.errors import FrameError, InvalidMassError, TotalConflictError, UndefinedTransformError
+from belief.errors import FrameError, InvalidMassError, UndefinedTransformError
 from belief.frame import Element, Frame
 from belief.model import Model, _show
-from belief.incidence import SPARSE_TABLE_ENTRIES, Incidence, incidence
+from belief.incidence import SPARSE_TABLE_ENTRIES, Incidence, incidence, without_empty
 from belief.plan import weighted_sum
 
 __all__ = ["MassBatch", "measure_plan", "MeasurePlan", "SUM_TOLERANCE", "resolve_model", "check_select"]
@@ -546,13 +546,7 @@ class MassBatch:
         empty = self.empty_mass
         if not empty.any():
             return self.values
-        keep = np.array([bool(e.terms) for e in self.focal], dtype=np.float64)
-        scale = (self.values * keep).sum(axis=1)
-        dead = scale <= 0
-        if dead.any():
-            where = f" (row {int(np.flatnonzero(dead)[0])})" if len(self) > 1 else ""
-            raise TotalConflictError(f"{what} is undefined: total conflict, m(∅) = 1{where}")
-        return self.values * keep / scale[:, None]
+        return without_empty(self.values, np.array([bool(e.terms) for e in self.focal], dtype=np.float64), what)
 
     # -- measures -----------------------------------------------------------------------------------
     def _finish(self, result: np.ndarray, single: bool, select) -> np.ndarray:

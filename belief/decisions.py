@@ -24,6 +24,7 @@ from belief.batch import MassBatch
 from belief.distances import _as_batch
 from belief.errors import MeasureOptionError, UnknownMeasureError
 from belief.frame import Element
+from belief.incidence import held_measure
 from belief.mass import MassFunction
 from belief.model import Model
 
@@ -231,6 +232,14 @@ def decide(m: Union[MassFunction, MassBatch], criterion: str = "betp", candidate
     if key not in CRITERIA:
         raise UnknownMeasureError(f"unknown decision criterion {criterion!r}; known criteria: {', '.join(CRITERIA)}")
     tol = _check_tolerance(tol)
+    if candidates is None and isinstance(m, MassFunction):
+        # The hypotheses (the default candidates under Shafer's model) of a mass function that holds its focal
+        # elements as bit masks: measured from the masks, as m.betp & co. do, without making its elements or the
+        # frame's singletons (None where that does not apply).
+        names = m.model.frame.hypotheses
+        scores = held_measure(m, key, names)
+        if scores is not None:
+            return _decisions(names, scores, tol)[0]
     batch, single = _as_batch(m, "the mass function")
     queries = _candidates(batch, candidates)
     if key == "dsmp":
@@ -238,9 +247,14 @@ def decide(m: Union[MassFunction, MassBatch], criterion: str = "betp", candidate
     else:
         scores = getattr(batch, key)(queries)
     scores = np.asarray(scores, dtype=np.float64).reshape(len(batch), len(queries))
-    value = scores.max(axis=1)
-    tied = scores >= (value - tol)[:, None]
     frame = batch.model.frame
     names = frame.hypotheses if queries is frame.singletons else tuple([str(q) for q in queries])
-    result = DecisionBatch(names, scores, value, tied, np.argmax(tied, axis=1))
+    result = _decisions(names, scores, tol)
     return result[0] if single else result
+
+
+def _decisions(names: tuple[str, ...], scores: np.ndarray, tol: float) -> DecisionBatch:
+    """The decisions of N rows of scores, shape (N, Q), among the Q candidates ``names``."""
+    value = scores.max(axis=1)
+    tied = scores >= (value - tol)[:, None]
+    return DecisionBatch(names, scores, value, tied, np.argmax(tied, axis=1))

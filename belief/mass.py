@@ -18,6 +18,7 @@ from belief.batch import (SUM_TOLERANCE, MassBatch, check_cardinality_range, che
                           trusted_batch)
 from belief.errors import FormatError, InvalidMassError
 from belief.frame import Element, Frame, make_elements
+from belief.incidence import held_measure
 from belief.model import Model, _show
 from belief.masks import canonical_order, to_words, union_key, word_count
 from belief.plan import RANK_TABLE_WIDTH, union_elements, union_ranks
@@ -491,7 +492,11 @@ class MassFunction(_MassSlots):
         return self._batch  # type: ignore[return-value]
 
     def _one(self, method: str, query, **kwargs):
-        result = getattr(self.batch(), method)(query, **kwargs)[0]
+        # Unions of hypotheses still held as masks are measured from them where that applies (no element made).
+        result = None if kwargs else held_measure(self, method, query)
+        if result is None:
+            result = getattr(self.batch(), method)(query, **kwargs)
+        result = result[0]
         if isinstance(query, (str, Element)):
             return float(result)
         return result
