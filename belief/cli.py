@@ -360,12 +360,79 @@ def _cmd_uncertainty(args: argparse.Namespace) -> int:
 
 
 def _cmd_plot(args: argparse.Namespace) -> int:
+    """``belief plot``: the picture is written to exactly ``--out`` (PNG when it has no suffix), then named."""
     from belief.plot import plot_mass
 
+    target = _picture_path(args.out)
     m = _read_bba(args.bba)
-    plot_mass(m, args.out, title=args.title or args.bba)
-    print(f"wrote {args.out}")
+    figure = plot_mass(m, title=args.title or args.bba)
+    _save_picture(figure, target)
+    print(f"wrote {target}")
     return 0
+
+
+def _picture_path(text: str):
+    """``--out`` of ``belief plot`` as a Path, refused before any work if no file can be written there."""
+    import os
+    from pathlib import Path
+
+    from belief.errors import OutputPathError
+
+    if not text.strip():
+        raise OutputPathError("--out must name the picture to write, got an empty path")
+    path = Path(text)
+    folder = path.parent
+    try:
+        if path.is_dir():
+            raise OutputPathError(f"--out {text}: it is a folder; name the picture to write in it")
+        if not folder.is_dir():
+            raise OutputPathError(f"--out {text}: there is no folder {folder} to write it in")
+        limit = os.pathconf(folder, "PC_NAME_MAX") if hasattr(os, "pathconf") else 255
+    except OSError as exc:
+        raise OutputPathError(f"--out {text}: {_path_reason(exc)}") from None
+    if len(os.fsencode(path.name)) > limit:
+        raise OutputPathError(f"--out {text}: the file name is {len(os.fsencode(path.name))} bytes long, over the "
+                              f"file system's limit of {limit}")
+    return path
+
+
+def _save_picture(figure, path) -> None:
+    """Write ``figure`` to a new file beside ``path``, then rename it to ``path`` (a symlink there is replaced).
+
+    The format is the suffix's, PNG without one: matplotlib would otherwise add ``.png`` to a
+    name without a suffix, and the file written would not be the one named.
+    """
+    import os
+    import secrets
+
+    from belief.errors import OutputPathError
+
+    kind = path.suffix[1:].lower() or "png"
+    known = figure.canvas.get_supported_filetypes()
+    if kind not in known:
+        raise FormatError(f"cannot write the picture {str(path)!r}: matplotlib writes {', '.join(sorted(known))}, "
+                          f"not {kind}")
+    staged = path.with_name(f".{path.name[:200]}.partial-{secrets.token_hex(4)}")
+    try:
+        # O_EXCL: never through an existing name, a symlink included.
+        handle = os.open(staged, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o666)
+        try:
+            with os.fdopen(handle, "wb") as stream:
+                figure.savefig(stream, format=kind)
+            os.replace(staged, path)
+        except BaseException:
+            staged.unlink(missing_ok=True)
+            raise
+    except OSError as exc:
+        raise OutputPathError(f"cannot write the picture {str(path)!r}: {_path_reason(exc)}") from None
+
+
+def _path_reason(exc: OSError) -> str:
+    import errno
+
+    if exc.errno == errno.ENAMETOOLONG:
+        return "a name in the path is over the file system's length limit"
+    return exc.strerror or str(exc)
 
 
 # -- demo ----------------------------------------------------------------------------------------------
@@ -474,7 +541,9 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Draw the masses, the Bel/BetP/Pls interval of every hypothesis and, for "
                                    "up to four hypotheses, the Hasse diagram of the focal elements.")
     p.add_argument("bba", metavar="BBA.json")
-    p.add_argument("--out", required=True, metavar="FIG.png", help="the picture to write (.png, .pdf, .svg, …)")
+    p.add_argument("--out", required=True, metavar="FIG.png",
+                   help="the picture to write, exactly there (its folder must exist); the format follows the "
+                        "suffix (.png, .pdf, .svg, …), PNG without one")
     p.add_argument("--title", help="a title (default: the file name)")
     p.set_defaults(func=_cmd_plot)
 

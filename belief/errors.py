@@ -24,6 +24,7 @@ __all__ = [
     "MeasureOptionError",
     "UnknownMeasureError",
     "UndefinedMeasureError",
+    "OutputPathError",
 ]
 
 
@@ -100,3 +101,8 @@ class UnknownMeasureError(MeasureOptionError):
 
 class UndefinedMeasureError(UndefinedTransformError):
     """A measure is undefined for this input: a model it is not defined on, or mass on ∅ where it allows none."""
+
+
+class OutputPathError(BeliefError, ValueError):
+    """An output cannot be written where it was asked: a missing or unwritable folder, a name too long, a folder
+    in the way, or a folder that holds the command's inputs or files it did not write."""

@@ -188,19 +188,45 @@ def _track(args: argparse.Namespace) -> int:
 
     _output_dir(args.out)
     config = TrackerConfig.from_settings(_settings(args), "belief track")
-    summary = _track_demo(args, config) if args.demo else _track_source(args, config)
+    if args.demo:
+        _demo_arguments(args)
+    out = _track_output(args)
+    try:
+        summary = _track_demo(args, config, out) if args.demo else _track_source(args, config, out)
+    except BaseException:
+        out.abort()
+        raise
     _report(args, summary)
     return 0
 
 
-def _track_demo(args: argparse.Namespace, config):
-    """``belief track --demo``: the demo scene, tracked automatically and scored against its ground truth."""
-    from . import scenes
+#: The files ``belief track --demo`` writes besides a run's own.
+DEMO_OUTPUTS = ("gt.txt", "scene.avi")
+
+
+def _track_output(args: argparse.Namespace):
+    """The output folder of ``belief track``, checked against every input before any work."""
+    from .outdir import OutputFolder, input_paths
+    from .runner import output_names
+
+    names = output_names(write_video=not args.no_video, extra=DEMO_OUTPUTS if args.demo else ())
+    inputs = input_paths(args.source, args.init, args.init_from_gt, args.gt, args.detections,
+                         getattr(args, "settings", None))
+    return OutputFolder(args.out, names, inputs=inputs, force=args.force)
+
+
+def _demo_arguments(args: argparse.Namespace) -> None:
     from .errors import TrackingError
-    from .runner import run
 
     if args.source is not None or args.init_from_gt is not None or args.init is not None or args.gt is not None:
         raise TrackingError("--demo takes no SOURCE, --init, --init-from-gt or --gt")
+
+
+def _track_demo(args: argparse.Namespace, config, out):
+    """``belief track --demo``: the demo scene, tracked automatically and scored against its ground truth."""
+    from . import scenes
+    from .runner import run
+
     scene = scenes.render(scenes.demo(args.seed))
     gt = scene.ground_truth
     height, width = scene.frames.shape[1:3]
@@ -208,11 +234,11 @@ def _track_demo(args: argparse.Namespace, config):
     extra = {"gt.txt": lambda path: scenes.write_gt(path, gt, visibility=scene.visibility),
              "scene.avi": lambda path: scenes.write_video(path, scene)}
     # The tracker finds the people itself, as on a user's video; the ground truth only scores it.
-    return run(scene, None, config, args.out, args.seed, write_video=not args.no_video,
+    return run(scene, None, config, out, args.seed, write_video=not args.no_video,
                progress=not args.no_progress, gt=gt, extra_outputs=extra, detections=detections)
 
 
-def _track_source(args: argparse.Namespace, config):
+def _track_source(args: argparse.Namespace, config, out):
     """``belief track SOURCE``: with an init file, a ground truth's births and deaths, or neither."""
     from .errors import TrackingError
     from .initiation import init_from_gt, read_init_boxes
@@ -235,7 +261,7 @@ def _track_source(args: argparse.Namespace, config):
     except BaseException:
         frames.close()
         raise
-    return run(frames, plan, config, args.out, args.seed, write_video=not args.no_video,
+    return run(frames, plan, config, out, args.seed, write_video=not args.no_video,
                progress=not args.no_progress, gt=gt, detections=detections)
 
 
@@ -243,8 +269,9 @@ def _report(args: argparse.Namespace, summary) -> None:
     """Print the run's speed and scores; a video that decoded fewer frames than announced is then an error."""
     from .errors import VideoError
 
+    written = ", ".join(path.name for path in summary.files.values())
     print(f"tracked {summary.frames} frames: {summary.tracking_fps:.1f} fps tracking, "
-          f"{summary.overall_fps:.1f} fps overall; outputs in {args.out}")
+          f"{summary.overall_fps:.1f} fps overall; outputs in {args.out}: {written}")
     if summary.scores is not None:
         s = summary.scores
         print(f"MOTA {s.mota:.4f}  IDF1 {s.idf1:.4f}  ID switches {s.id_switches}  "
@@ -266,7 +293,10 @@ TRACK_DESCRIPTION = ("Track targets in a video (a video file, a folder of images
                      "detections (--detections) or foreground blobs that persist, are hidden while nothing supports "
                      "them, take back their id when they are seen again, and end when they leave. Writes tracks.txt "
                      "(MOTChallenge), diagnostics.csv, diagnostics.png, annotated.avi and summary.json into "
-                     "--out, and removes those of an earlier run there that this run does not write. With --demo, "
+                     "--out (each written under a temporary name and renamed), and removes the files of an earlier "
+                     "run there that this run does not write. It refuses to start when --out is, lies inside or "
+                     "holds one of its inputs, or holds files that no run wrote there (a hidden list, "
+                     ".belief-outputs.json, names the files runs wrote) unless --force. With --demo, "
                      "renders a synthetic scene, tracks it automatically and prints its scores against the scene's "
                      "ground truth. Exit status: 0 when the whole source was tracked; 1 on bad input (one line "
                      "on standard error, no output left), or when a video decodes fewer frames than its container "
@@ -294,6 +324,9 @@ def register(subparsers: Any) -> None:
     _add_tracker_settings(p)
     p.add_argument("--no-video", action="store_true", help="do not write annotated.avi")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--force", action="store_true",
+                   help="write into --out even if it holds files that no run wrote there: those of the run's file "
+                        "names are replaced, the others left (never when --out holds an input)")
     p.set_defaults(func=_cmd_track)
 
 
@@ -398,11 +431,15 @@ def register_eval(subparsers: Any) -> None:
 def _cmd_experiment(args: argparse.Namespace) -> int:
     from .experiment import load_experiment
     from .grid import check_output, run_experiment
+    from .outdir import check_folder, input_paths
     from .tables import format_summary
 
     _output_dir(args.out)
     experiment = load_experiment(args.config, data_dir=args.data)
     out = check_output(args.out if args.out is not None else Path(args.config).with_suffix(""))
+    inputs = [args.config, *(path for sequence in experiment.sequences
+                             for path in (sequence.video, sequence.gt, sequence.detections))]
+    check_folder(out, input_paths(*inputs), create=False)
     cells = experiment.cells()
     line = (f"{experiment.name}: {len(experiment.sequences)} sequences x {len(experiment.methods)} methods x "
             f"{len(experiment.seeds)} seeds = {len(cells)} runs; outputs in {out}")

@@ -7,10 +7,10 @@ generic ``except ValueError`` code keeps working.
 
 from __future__ import annotations
 
-from belief.errors import BeliefError
+from belief.errors import BeliefError, OutputPathError
 
 __all__ = ["TrackingError", "TrackFileError", "DetectionFileError", "UnknownCueError", "VideoError", "InitError",
-           "MissingExtraError"]
+           "MissingExtraError", "OutputFolderError"]
 
 
 class TrackingError(BeliefError, ValueError):
@@ -39,3 +39,7 @@ class InitError(TrackingError):
 
 class MissingExtraError(BeliefError, ModuleNotFoundError):
     """A package of the plugin's ``tracking`` extra is not installed; the message says how to install it."""
+
+
+class OutputFolderError(TrackingError, OutputPathError):
+    """``--out`` cannot take the run's files: it holds an input or files no run wrote there, or it cannot be written."""

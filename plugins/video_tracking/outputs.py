@@ -6,11 +6,8 @@
 * ``summary.json`` — frames, speed, parameters, seed, version and scores;
 * ``diagnostics.png`` — the curves of W's Fig. 10, one line per target.
 
-:class:`StagedOutputs` writes every file under a temporary name and renames them all at the
-end, ``summary.json`` last, so a run that fails leaves nothing that looks complete; a run that
-succeeds also removes the files of :data:`RUN_OUTPUTS` that it did not write (an
-``annotated.avi`` of an earlier run, when this one has ``--no-video``), so that the directory
-holds the outputs of its latest run only.
+A run stages them in its output folder and renames them into place once it is known to be
+good, ``summary.json`` last (:class:`~belief_tracking.outdir.OutputFolder`).
 
 The run's writers (:mod:`~belief_tracking.writers`) keep what each frame gives and write these
 files with the functions here once the run is known to be good.
@@ -21,121 +18,18 @@ from __future__ import annotations
 import csv
 import json
 import math
-import os
 from collections.abc import Mapping, Sequence
 from os import PathLike
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .errors import TrackingError
 from .extras import require
 
-__all__ = ["StagedOutputs", "RUN_OUTPUTS", "write_diagnostics", "write_summary", "plot_diagnostics"]
+__all__ = ["RUN_OUTPUTS", "write_diagnostics", "write_summary", "plot_diagnostics"]
 
 #: The files that a tracking run may write into its output directory.
 RUN_OUTPUTS = ("tracks.txt", "diagnostics.csv", "diagnostics.png", "annotated.avi", "summary.json")
-
-
-class StagedOutputs:
-    """Output files written under temporary names, renamed into place by :meth:`commit`.
-
-    Parameters
-    ----------
-    out_dir : path
-        The output directory, a non-empty path (``""`` is refused rather than taken as the
-        working directory); created if needed (and removed again by :meth:`abort`, with the
-        parents created with it, if it was created here and is left empty).
-    owned : sequence of str
-        The names that this kind of run writes: on :meth:`commit`, those of them that this run
-        did not write are deleted from the directory, as left over from an earlier run.  Other
-        files are never touched.
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> folder = Path(tempfile.mkdtemp()) / "run"
-    >>> staged = StagedOutputs(folder, owned=("tracks.txt", "annotated.avi"))
-    >>> _ = staged.path("tracks.txt").write_text("1,1,1,1,2,2,-1,-1,-1,-1\\n")
-    >>> sorted(p.name for p in folder.iterdir())
-    ['.tracks.partial.txt']
-    >>> _ = (folder / "annotated.avi").write_text("from an earlier run")
-    >>> _ = (folder / "notes.txt").write_text("the user's own")
-    >>> _ = staged.commit()
-    >>> sorted(p.name for p in folder.iterdir())
-    ['notes.txt', 'tracks.txt']
-    """
-
-    def __init__(self, out_dir: str | PathLike[str], owned: Sequence[str] = ()) -> None:
-        if not isinstance(out_dir, (str, PathLike)) or not os.fspath(out_dir).strip():
-            # Path("") is the working directory: an empty --out would scatter the files there.
-            raise TrackingError(f"the output directory must be a non-empty path, got {out_dir!r}")
-        self.out_dir = Path(out_dir)
-        if self.out_dir.exists() and not self.out_dir.is_dir():
-            raise TrackingError(f"the output {str(out_dir)!r} exists and is not a directory")
-        self._owned = tuple(owned)
-        # The directories created here, innermost first, for abort to remove again.
-        self._created_dirs: list[Path] = []
-        for folder in (self.out_dir, *self.out_dir.parents):
-            if folder.exists():
-                break
-            self._created_dirs.append(folder)
-        try:
-            self.out_dir.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise TrackingError(f"cannot create the output directory {str(out_dir)!r}: "
-                                f"{exc.strerror or exc}") from None
-        self._staged: dict[str, Path] = {}
-
-    def path(self, name: str) -> Path:
-        """The temporary path under which the final file ``name`` is written (same suffix)."""
-        final = Path(name)
-        staged = self.out_dir / f".{final.stem}.partial{final.suffix}"
-        self._staged[name] = staged
-        return staged
-
-    def commit(self) -> dict[str, Path]:
-        """Rename every staged file to its final name, ``summary.json`` last; returns the final paths.
-
-        The owned names that this run did not write are deleted first, and so is an earlier
-        ``summary.json``, so that no summary describes a mix of two runs even for a moment.
-        """
-        written = {name for name, staged in self._staged.items() if staged.exists()}
-        stale = [name for name in self._owned if name not in written]
-        if "summary.json" in written:
-            stale.append("summary.json")
-        for name in stale:
-            try:
-                (self.out_dir / name).unlink()
-            except (FileNotFoundError, IsADirectoryError):
-                pass  # a directory of that name is not a run's file: somebody else's
-            except OSError as exc:
-                raise TrackingError(f"cannot remove {str(self.out_dir / name)!r} of an earlier run: "
-                                    f"{exc.strerror or exc}") from None
-        order = sorted(self._staged, key=lambda name: name == "summary.json")
-        final = {}
-        for name in order:
-            staged = self._staged[name]
-            if staged.exists():
-                os.replace(staged, self.out_dir / name)
-                final[name] = self.out_dir / name
-        self._staged.clear()
-        return final
-
-    def abort(self) -> None:
-        """Delete the staged files (and the output directory if it was created here and is empty)."""
-        for staged in self._staged.values():
-            try:
-                staged.unlink()
-            except FileNotFoundError:
-                pass
-        self._staged.clear()
-        for folder in self._created_dirs:
-            try:
-                folder.rmdir()
-            except OSError:
-                break
 
 
 def write_diagnostics(path: str | PathLike[str], records: Sequence[Mapping[str, float]],
@@ -159,7 +53,16 @@ def _cell(value: float) -> str:
 
 
 def write_summary(path: str | PathLike[str], summary: Mapping[str, Any]) -> None:
-    """Write the run summary as indented JSON (NaN becomes null)."""
+    """Write the run summary as indented JSON (NaN becomes null).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> path = os.path.join(tempfile.mkdtemp(), "summary.json")
+    >>> write_summary(path, {"frames": np.int64(3), "mota": float("nan")})
+    >>> json.load(open(path, encoding="utf-8"))
+    {'frames': 3, 'mota': None}
+    """
     with open(path, "w", encoding="utf-8") as handle:
         json.dump(_json_ready(summary), handle, indent=2, allow_nan=False)
         handle.write("\n")

@@ -1,7 +1,8 @@
 """A whole tracking run: frames in, files out (``belief track``).
 
-:func:`run` checks its inputs, opens the source and stages the outputs
-(:class:`~belief_tracking.outputs.StagedOutputs`), makes a
+:func:`run` checks its output folder and its inputs
+(:class:`~belief_tracking.outdir.OutputFolder`: nothing of the user's is replaced), opens
+the source, makes a
 :class:`~belief_tracking.tracker.Tracker` (:func:`start_tracker`), and hands its frame
 results to the run's writers (:mod:`~belief_tracking.writers`: tracks, diagnostics, plot,
 annotated video, progress bar, timing, scores and summary), which write the files once the
@@ -25,6 +26,7 @@ from .errors import DetectionFileError, InitError, TrackingError
 from .extras import require
 from .initiation import InitPlan
 from .motfiles import read_mot
+from .outdir import OutputFolder, input_paths
 from .sources import FrameSource, open_source
 from .tracker import Tracker
 from .writers import (
@@ -41,7 +43,7 @@ from .writers import (
     feed,
 )
 
-__all__ = ["Summary", "run", "start_tracker"]
+__all__ = ["Summary", "run", "start_tracker", "output_names"]
 
 
 @dataclass(frozen=True)
@@ -90,9 +92,23 @@ class Summary:
                 "files": {k: str(v) for k, v in self.files.items()}}
 
 
-def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), out_dir: str | PathLike[str] = "track",
-        seed: int = 0, write_video: bool = True, progress: bool = True, gt: np.ndarray | str | None = None,
-        extra_outputs: dict | None = None, write_plot: bool = True, detections: Detections | None = None) -> Summary:
+def output_names(write_video: bool = True, write_plot: bool = True, extra: tuple[str, ...] | dict = ()) -> tuple[str, ...]:
+    """The names of the files a :func:`run` writes, ``summary.json`` last.
+
+    Examples
+    --------
+    >>> output_names(write_video=False, extra=("gt.txt",))
+    ('tracks.txt', 'diagnostics.csv', 'diagnostics.png', 'gt.txt', 'summary.json')
+    """
+    left = {"annotated.avi": write_video, "diagnostics.png": write_plot}
+    names = [name for name in outputs.RUN_OUTPUTS if left.get(name, True) and name != "summary.json"]
+    return (*names, *extra, "summary.json")
+
+
+def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(),
+        out_dir: str | PathLike[str] | OutputFolder = "track", seed: int = 0, write_video: bool = True,
+        progress: bool = True, gt: np.ndarray | str | None = None, extra_outputs: dict | None = None,
+        write_plot: bool = True, detections: Detections | None = None, force: bool = False) -> Summary:
     """Track ``source`` and write the outputs into ``out_dir``.
 
     Parameters
@@ -108,12 +124,17 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
     config : TrackerConfig
         With ``config.warm_up`` > 0 the background model first learns from that many frames
         spread over the whole source (a video file is then decoded twice).
-    out_dir : path
+    out_dir : path or OutputFolder
         Receives ``tracks.txt``, ``diagnostics.csv``, ``diagnostics.png`` (unless
-        ``write_plot`` is false), ``annotated.avi`` (unless ``write_video`` is false) and
-        ``summary.json``, written last.  Of these names, those that the run does not write
-        (``annotated.avi`` with ``write_video`` false, say) are removed from the directory when
-        the run succeeds, so that it holds the outputs of one run only; other files are left.
+        ``write_plot`` is false), ``annotated.avi`` (unless ``write_video`` is false), the
+        ``extra_outputs`` and ``summary.json``, written last (:func:`output_names`).  It is
+        checked before any work (:class:`~belief_tracking.outdir.OutputFolder`): refused if it
+        is, lies inside or holds the source or the ground-truth file, or, unless ``force``,
+        if it holds files that no run wrote there.  The files of an earlier run there that
+        this one does not write (``annotated.avi`` with ``write_video`` false, say) are
+        removed when the run succeeds, so that it holds the outputs of one run only.  An
+        :class:`~belief_tracking.outdir.OutputFolder` already checked (by a command line that
+        knows every input) is used as it is.
     seed : int
         Seed of the run's only random generator.
     progress : bool
@@ -129,6 +150,9 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
         given to the tracker frame by frame; the summary records their source.  Detections
         after the last frame or wholly outside the image are refused before anything is
         written.
+    force : bool
+        Write into ``out_dir`` even if it holds files that no run wrote there (those of the
+        run's names are replaced, the others left).
 
     Returns
     -------
@@ -145,20 +169,23 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(), 
         Unreadable video (:class:`VideoError`), boxes outside the image (:class:`InitError`),
         detections that do not fit the video (:class:`DetectionFileError`), …
         On any error the staged files are deleted: nothing that looks complete is left.
+    OutputFolderError
+        ``out_dir`` may not receive the run's files (the message says why).
     """
     for package in ("tqdm", "cv2"):
         require(package)  # a missing extra is one line, before any input is read or any file written
     _check_arguments(seed, init, config, detections)
     started = time.perf_counter()
-    frames = open_source(source)
+    names = output_names(write_video, write_plot, tuple(extra_outputs or ()))
+    staged = _output_folder(out_dir, names, input_paths(source, gt), force)
+    try:
+        frames = open_source(source)
+    except BaseException:
+        staged.abort()
+        raise
     try:
         gt_rows = _ground_truth(gt)
         _check_fit(frames, init, detections)
-        staged = outputs.StagedOutputs(out_dir, owned=outputs.RUN_OUTPUTS + tuple(extra_outputs or ()))
-    except BaseException:
-        frames.close()
-        raise
-    try:
         tracker = start_tracker(config, init, seed, frames)
         timing = Timing(started)
         tracks = TracksWriter(staged.path("tracks.txt"))
@@ -194,6 +221,16 @@ def start_tracker(config: TrackerConfig, init: InitPlan | None, seed: int, sourc
     return tracker
 
 
+def _output_folder(out_dir, names: tuple[str, ...], inputs: list[str], force: bool) -> OutputFolder:
+    """``out_dir`` checked for a run writing ``names`` (an OutputFolder given is trusted to be checked already)."""
+    if not isinstance(out_dir, OutputFolder):
+        return OutputFolder(out_dir, names, inputs=inputs, force=force)
+    if not set(names) <= set(out_dir.names):
+        raise TrackingError(f"the output folder was checked for {', '.join(out_dir.names)}, not for "
+                            f"{', '.join(sorted(set(names) - set(out_dir.names)))}")
+    return out_dir
+
+
 def _check_arguments(seed, init, config, detections) -> None:
     """Refuse arguments of the wrong type before any input is opened."""
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
@@ -223,7 +260,7 @@ def _check_fit(frames: FrameSource, init: InitPlan | None, detections: Detection
         check_detections(detections, frame_count=frames.count, image_size=(frames.width, frames.height))
 
 
-def _writers(staged: outputs.StagedOutputs, frames: FrameSource, config: TrackerConfig, timing: Timing,
+def _writers(staged: OutputFolder, frames: FrameSource, config: TrackerConfig, timing: Timing,
              tracks: TracksWriter, diagnostics: DiagnosticsWriter, scoring: Scoring | None, *,
              settings: dict, write_video: bool, write_plot: bool, progress: bool,
              extra_outputs: dict) -> list[FrameWriter]:

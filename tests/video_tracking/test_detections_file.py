@@ -236,10 +236,11 @@ def test_an_output_folder_holds_the_files_of_its_latest_run_only(tmp_path, plan,
     mine.write_text("kept")
     (out / "annotated").mkdir()
     config = TrackerConfig(particles=10)
-    run(frames_with_a_red_block(), plan, config, out, progress=False)
+    run(frames_with_a_red_block(), plan, config, out, progress=False, force=True)
     assert {p.name for p in out.iterdir()} == {"tracks.txt", "diagnostics.csv", "diagnostics.png", "annotated.avi",
-                                               "summary.json", "notes.txt", "annotated"}
-    run(frames_with_a_red_block(), plan, config, out, progress=False, write_video=False, write_plot=False)
+                                               "summary.json", "notes.txt", "annotated", ".belief-outputs.json"}
+    run(frames_with_a_red_block(), plan, config, out, progress=False, write_video=False, write_plot=False,
+        force=True)
     assert {p.name for p in out.iterdir()} == {"tracks.txt", "diagnostics.csv", "summary.json", "notes.txt",
-                                               "annotated"}
+                                               "annotated", ".belief-outputs.json"}
     assert mine.read_text() == "kept"

@@ -172,7 +172,7 @@ def test_a_failing_output_deletes_the_staged_files_and_leaves_the_others(tmp_pat
 
     with pytest.raises(TrackingError, match="extra output"):
         run(short_scene, init_from_gt(short_scene.ground_truth), TrackerConfig(particles=10), out,
-            write_video=False, progress=False, extra_outputs={"extra.txt": broken})
+            write_video=False, progress=False, extra_outputs={"extra.txt": broken}, force=True)
     assert sorted(p.name for p in out.iterdir()) == ["notes.txt", "tracks.txt"]
     assert (out / "tracks.txt").read_text() == "of an earlier run\n"
 
