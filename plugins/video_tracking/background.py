@@ -44,6 +44,7 @@ import numpy as np
 
 from .errors import TrackingError
 from .extras import require
+from .limits import shown as _shown
 
 cv2 = require("cv2")
 
@@ -86,6 +87,16 @@ _MODE_CANDIDATES = 50
 #: noise variance is the median of the squared colour distances divided by it.  (Channel
 #: sums would not do: the noise of a compressed video is much the same in every channel.)
 _CHI2_MEDIAN = {1: 0.4549, 3: 2.3660}
+
+
+#: The longest memory of the model, in frames (its learning rate is then 10^-5; MOG2 keeps it as an int).
+MAX_HISTORY = 100_000
+#: The most mixture components per pixel: each costs 20 bytes a pixel, and OpenCV's default is 5.
+MAX_MIXTURES = 16
+#: The largest shrink factor of the frames the mixtures see.
+MAX_DOWNSCALE = 64
+#: The largest squared colour distance that makes sense (3 x 255^2 = 195 075, with room to spare).
+MAX_VAR_THRESHOLD = 1e6
 
 
 @dataclass(frozen=True)
@@ -153,29 +164,40 @@ class BackgroundConfig:
     downscale: int = 2
 
     def __post_init__(self) -> None:
-        for name in ("history", "mixtures", "relearn_frames", "downscale"):
+        for name, largest in (("history", MAX_HISTORY), ("mixtures", MAX_MIXTURES),
+                              ("relearn_frames", MAX_HISTORY), ("downscale", MAX_DOWNSCALE)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-                raise TrackingError(f"BackgroundConfig.{name} must be a positive integer, got {value!r}")
+                raise TrackingError(f"BackgroundConfig.{name} must be a positive integer, got {_shown(value)}")
+            if value > largest:
+                raise TrackingError(f"BackgroundConfig.{name} must be at most {largest:,}, got {_shown(value)}")
+        for name in ("var_threshold", "gain_change"):
+            value = getattr(self, name)
+            if _is_number(value) and math.isfinite(value) and value > MAX_VAR_THRESHOLD:
+                raise TrackingError(f"BackgroundConfig.{name} must be at most {MAX_VAR_THRESHOLD:g}, got {_shown(value)}")
         if not _is_number(self.var_threshold) or not self.var_threshold > 0:
-            raise TrackingError(f"BackgroundConfig.var_threshold must be a positive number, got {self.var_threshold!r}")
+            raise TrackingError(f"BackgroundConfig.var_threshold must be a positive number, got {_shown(self.var_threshold)}")
         for name in ("background_ratio", "max_foreground"):
             value = getattr(self, name)
             if not _is_number(value) or not 0 < value <= 1:
-                raise TrackingError(f"BackgroundConfig.{name} must lie in (0, 1], got {value!r}")
+                raise TrackingError(f"BackgroundConfig.{name} must lie in (0, 1], got {_shown(value)}")
         if not _is_number(self.gain_change) or not self.gain_change > 0:
-            raise TrackingError(f"BackgroundConfig.gain_change must be a positive number, got {self.gain_change!r}")
+            raise TrackingError(f"BackgroundConfig.gain_change must be a positive number, got {_shown(self.gain_change)}")
         for name in ("detect_shadows", "compensate_gain", "median_warm_up"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
-                raise TrackingError(f"BackgroundConfig.{name} must be True or False, got {getattr(self, name)!r}")
+                raise TrackingError(f"BackgroundConfig.{name} must be True or False, got {_shown(getattr(self, name))}")
         if self.learning_rate is not None and (not _is_number(self.learning_rate) or not 0 <= self.learning_rate <= 1):
             raise TrackingError(f"BackgroundConfig.learning_rate must be None or lie in [0, 1], "
-                                f"got {self.learning_rate!r}")
+                                f"got {_shown(self.learning_rate)}")
 
 
 def _is_number(value) -> bool:
-    return not isinstance(value, bool) and isinstance(value, (int, float, np.integer, np.floating)) \
-        and math.isfinite(value)
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:        # an int beyond any float
+        return False
 
 
 def _check_frame(image) -> np.ndarray:

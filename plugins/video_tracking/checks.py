@@ -25,6 +25,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .errors import TrackingError
+from .limits import shown
 
 __all__ = ["number", "integer", "choice", "flag", "fraction", "instance", "image_shape"]
 
@@ -33,31 +34,31 @@ def number(name: str, value: object, *, minimum: float | None = None, positive: 
            maximum: float | None = None) -> float:
     """``value`` as a finite float within the bounds (``positive``: strictly above 0)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TrackingError(f"{name} must be a number, got {value!r}")
+        raise TrackingError(f"{name} must be a number, got {shown(value)}")
     result = float(value)
     if not math.isfinite(result):
-        raise TrackingError(f"{name} must be finite, got {value!r}")
+        raise TrackingError(f"{name} must be finite, got {shown(value)}")
     if positive and result <= 0:
-        raise TrackingError(f"{name} must be positive, got {value!r}")
+        raise TrackingError(f"{name} must be positive, got {shown(value)}")
     if minimum is not None and result < minimum:
-        raise TrackingError(f"{name} must be at least {minimum:g}, got {value!r}")
+        raise TrackingError(f"{name} must be at least {minimum:g}, got {shown(value)}")
     if maximum is not None and result > maximum:
-        raise TrackingError(f"{name} must be at most {maximum:g}, got {value!r}")
+        raise TrackingError(f"{name} must be at most {maximum:g}, got {shown(value)}")
     return result
 
 
 def integer(name: str, value: object, *, minimum: int | None = None, maximum: int | None = None) -> int:
     """``value`` as an int (a bool is refused) within the bounds."""
     if isinstance(value, (bool, np.bool_)):
-        raise TrackingError(f"{name} must be an integer, got {value!r}")
+        raise TrackingError(f"{name} must be an integer, got {shown(value)}")
     try:
         result = operator.index(value)  # type: ignore[arg-type]
     except TypeError:
-        raise TrackingError(f"{name} must be an integer, got {value!r}") from None
+        raise TrackingError(f"{name} must be an integer, got {shown(value)}") from None
     if minimum is not None and result < minimum:
-        raise TrackingError(f"{name} must be an integer >= {minimum}, got {value!r}")
+        raise TrackingError(f"{name} must be an integer >= {minimum}, got {shown(value)}")
     if maximum is not None and result > maximum:
-        raise TrackingError(f"{name} must be an integer <= {maximum}, got {value!r}")
+        raise TrackingError(f"{name} must be an integer <= {maximum}, got {shown(value)}")
     return int(result)
 
 
@@ -66,21 +67,21 @@ def fraction(name: str, value: object, *, allow_zero: bool = True) -> float:
     interval = "[0, 1]" if allow_zero else "(0, 1]"
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)) \
             or not math.isfinite(value) or not 0 <= value <= 1 or (value == 0 and not allow_zero):
-        raise TrackingError(f"{name} must be a number in {interval}, got {value!r}")
+        raise TrackingError(f"{name} must be a number in {interval}, got {shown(value)}")
     return float(value)
 
 
 def choice(name: str, value: object, choices: Sequence[str]) -> str:
     """One of ``choices``; the message lists them."""
     if not isinstance(value, str) or value not in choices:
-        raise TrackingError(f"{name} must be one of {', '.join(choices)}, got {value!r}")
+        raise TrackingError(f"{name} must be one of {', '.join(choices)}, got {shown(value)}")
     return value
 
 
 def flag(name: str, value: object) -> bool:
     """True or False (numpy booleans too; not 0 or 1)."""
     if not isinstance(value, (bool, np.bool_)):
-        raise TrackingError(f"{name} must be True or False, got {value!r}")
+        raise TrackingError(f"{name} must be True or False, got {shown(value)}")
     return bool(value)
 
 
@@ -100,5 +101,5 @@ def image_shape(shape) -> tuple[int, int]:
         dims = ()
     if len(dims) not in (2, 3) or any(isinstance(d, bool) or not isinstance(d, (int, np.integer)) or d < 1
                                        for d in dims[:2]):
-        raise TrackingError(f"image_shape must be (H, W) or (H, W, C) with positive H and W, got {shape!r}")
+        raise TrackingError(f"image_shape must be (H, W) or (H, W, C) with positive H and W, got {shown(shape)}")
     return int(dims[0]), int(dims[1])

@@ -74,23 +74,15 @@ def parse_setting(text: str) -> tuple[list[str], Any]:
     >>> parse_setting("cues=['colour', 'edges']")
     (['cues'], ['colour', 'edges'])
     """
+    from . import limits
     from .errors import TrackingError
-
-    try:
-        import tomllib
-    except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-        tomllib = require("tomli")
 
     key, separator, value = text.partition("=")
     path = [part.strip() for part in key.split(".")]
     if not separator or not all(path):
         raise TrackingError(f"--set takes KEY=VALUE (e.g. belief.masses=normalised or location.sigma=8), "
-                            f"got {text!r}")
-    try:
-        parsed = tomllib.loads(f"value = {value.strip()}")["value"]
-    except tomllib.TOMLDecodeError:
-        parsed = value.strip()
-    return path, parsed
+                            f"got {limits.clipped(repr(text))}")
+    return path, limits.toml_value(value, f"--set {limits.clipped(text)}")
 
 
 def _settings(args: argparse.Namespace) -> dict[str, Any]:
@@ -175,8 +167,10 @@ def _output_dir(text: str | None, option: str = "--out") -> None:
 
 def _cmd_track(args: argparse.Namespace) -> int:
     """``belief track``: SIGTERM ends it as Ctrl-C does, with no staged file left behind."""
+    from . import limits
+
     try:
-        with _sigterm_interrupts():
+        with _sigterm_interrupts(), limits.applied(limits.given(args)):
             return _track(args)
     except _Terminated:
         print(f"belief: terminated (SIGTERM); nothing of this run was left in {args.out}", file=sys.stderr)
@@ -327,6 +321,9 @@ def register(subparsers: Any) -> None:
     p.add_argument("--force", action="store_true",
                    help="write into --out even if it holds files that no run wrote there: those of the run's file "
                         "names are replaced, the others left (never when --out holds an input)")
+    from . import limits
+
+    limits.add_options(p)
     p.set_defaults(func=_cmd_track)
 
 

@@ -16,11 +16,12 @@ from dataclasses import dataclass, field, fields, is_dataclass
 from typing import Any
 
 from belief.errors import BeliefError
-from . import checks
+from . import checks, limits
 from .adaptive import AdaptiveConfig
 from .background import BackgroundConfig
 from .cues import CUES, ColourConfig, DetectionConfig, EdgeConfig, LocationConfig
 from .errors import TrackingError, UnknownCueError
+from .limits import shown
 from .fusion import FusionConfig
 from .initiation import InitiationConfig
 from .particles import RESAMPLERS, MotionConfig
@@ -38,6 +39,13 @@ DIAGNOSTICS = ("strategy", "all")
 #: 100 particles a frame of 320 x 240 takes about 1.5 s at 100 targets, 5 s at 200 and
 #: (cubically) minutes at 500.
 MAX_TARGETS = 100
+
+#: The largest :attr:`TrackerConfig.max_targets` accepted at all (the memory estimate bounds it further).
+MAX_TARGETS_BOUND = 100_000
+
+#: Sample points of a box, across times down, in a colour or edge cue (default 12 x 24 = 288).
+#: The cost of a particle grows with them: 4096 samples make a frame 14 times slower.
+MAX_SAMPLES = 4096
 
 
 @dataclass(frozen=True)
@@ -158,22 +166,27 @@ class TrackerConfig:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "particles", checks.integer("TrackerConfig.particles", self.particles, minimum=1))
-        cues = (self.cues,) if isinstance(self.cues, str) else tuple(self.cues)
+        cues = (self.cues,) if isinstance(self.cues, str) else self.cues
+        if not isinstance(cues, (tuple, list)):
+            raise TrackingError(f"TrackerConfig.cues must be a list of cue names, got {shown(cues)}")
+        cues = tuple(cues)
         if not cues:
             raise TrackingError("TrackerConfig.cues must name at least one cue")
         for name in cues:
+            if not isinstance(name, str):
+                raise TrackingError(f"TrackerConfig.cues must be a list of cue names, got {shown(name)} in it")
             if name not in CUES:
-                raise UnknownCueError(f"unknown cue {name!r}; known cues: {', '.join(CUES)}")
+                raise UnknownCueError(f"unknown cue {shown(name)}; known cues: {', '.join(CUES)}")
         if len(set(cues)) != len(cues):
             raise TrackingError(f"TrackerConfig.cues names a cue twice: {', '.join(cues)}")
         object.__setattr__(self, "cues", cues)
-        if self.fusion not in WEIGHTINGS:
-            raise TrackingError(f"unknown fusion {self.fusion!r}; known fusions: {', '.join(WEIGHTINGS)}")
-        if self.resampling not in RESAMPLERS:
-            raise TrackingError(f"unknown resampler {self.resampling!r}; known: {', '.join(sorted(RESAMPLERS))}")
+        if not isinstance(self.fusion, str) or self.fusion not in WEIGHTINGS:
+            raise TrackingError(f"unknown fusion {shown(self.fusion)}; known fusions: {', '.join(WEIGHTINGS)}")
+        if not isinstance(self.resampling, str) or self.resampling not in RESAMPLERS:
+            raise TrackingError(f"unknown resampler {shown(self.resampling)}; known: {', '.join(sorted(RESAMPLERS))}")
         object.__setattr__(self, "ess_threshold", checks.fraction("TrackerConfig.ess_threshold", self.ess_threshold))
         object.__setattr__(self, "init_sigma", checks.number("TrackerConfig.init_sigma", self.init_sigma,
-                                                             minimum=0.0))
+                                                             minimum=0.0, maximum=limits.MAX_SPREAD))
         for name, kind in (("belief", FusionConfig), ("motion", MotionConfig), ("location", LocationConfig),
                            ("colour", ColourConfig), ("foreground", ColourConfig), ("edges", EdgeConfig),
                            ("detections", DetectionConfig), ("background", BackgroundConfig),
@@ -183,11 +196,15 @@ class TrackerConfig:
         checks.choice("TrackerConfig.diagnostics", self.diagnostics, DIAGNOSTICS)
         for name in ("adaptive_particles", "template_update"):
             object.__setattr__(self, name, checks.flag(f"TrackerConfig.{name}", getattr(self, name)))
-        object.__setattr__(self, "warm_up", checks.integer("TrackerConfig.warm_up", self.warm_up, minimum=0))
+        object.__setattr__(self, "warm_up", checks.integer("TrackerConfig.warm_up", self.warm_up, minimum=0,
+                                                           maximum=limits.MAX_FRAMES))
         object.__setattr__(self, "max_targets", checks.integer("TrackerConfig.max_targets", self.max_targets,
-                                                               minimum=1))
+                                                               minimum=1, maximum=MAX_TARGETS_BOUND))
         if self.initiation is not None:
             checks.instance("TrackerConfig.initiation", self.initiation, InitiationConfig)
+        _check_cue_ranges(self)
+        # The particles of every target live at once: their memory is bounded before any frame is read.
+        limits.check_config(self)
 
     @classmethod
     def from_settings(cls, settings: Mapping[str, Any], where: str = "settings") -> "TrackerConfig":
@@ -213,7 +230,10 @@ class TrackerConfig:
         belief_tracking.errors.TrackingError: settings: unknown key 'particle'; known keys: particles, cues, ...
         """
         if not isinstance(settings, Mapping):
-            raise TrackingError(f"{where} must be a table of TrackerConfig settings, got {settings!r}")
+            raise TrackingError(f"{where} must be a table of TrackerConfig settings, got {shown(settings)}")
+        # Nesting, texts, lists and integers are bounded before any value is looked at, so that no
+        # check behind recurses, loops or quotes without end.
+        limits.check_settings_tree(settings, where)
         _check_keys(settings, [f.name for f in fields(cls)], where, {"belief": FusionConfig})
         defaults = cls()
         keywords = {}
@@ -230,8 +250,10 @@ class TrackerConfig:
             keywords[name] = value
         try:
             return cls(**keywords)
-        except BeliefError as exc:
-            raise TrackingError(f"{where}: {exc}") from None
+        except limits.TrackingLimitError as exc:
+            raise limits.TrackingLimitError(f"{where}: {exc}", exc.limit) from None
+        except (BeliefError, TypeError, ValueError, OverflowError) as exc:
+            raise TrackingError(f"{where}: {limits.clipped(str(exc))}") from None
 
     def cue_config(self, name: str):
         """The settings object of cue ``name``."""
@@ -264,21 +286,66 @@ class TrackerConfig:
         return f"{self.fusion} fusion"
 
 
+#: The smallest standard deviation of a cue (its square must not underflow, nor d²/σ² overflow).
+MIN_SIGMA = 1e-100
+
+#: The largest standard deviation of an appearance cue: its distances lie in [0, 1], so σ beyond makes it flat.
+MAX_CUE_SIGMA = 1e3
+
+#: The largest size in pixels of a morphological opening or of the image border of the initiation.
+MAX_MASK_PIXELS = 1000
+
+
+def _check_cue_ranges(config: TrackerConfig) -> None:
+    """Bounds of the nested settings that their own dataclasses leave open: sample grids, spreads and counts.
+
+    Each part checks the type and sign of its fields; the ranges beyond which a value means
+    nothing (a σ that flattens its cue, a frame count no video reaches) are checked here, with
+    the settings they combine with.
+    """
+    for name in ("colour", "foreground", "edges"):
+        cue = getattr(config, name)
+        across, down = cue.samples
+        if across * down > MAX_SAMPLES:
+            raise TrackingError(f"TrackerConfig.{name}.samples = ({across}, {down}) makes {across * down:,} "
+                                f"sample points a box, more than {MAX_SAMPLES:,}")
+        checks.number(f"TrackerConfig.{name}.sigma", cue.sigma, minimum=MIN_SIGMA, maximum=MAX_CUE_SIGMA)
+    checks.number("TrackerConfig.edges.min_gradient", config.edges.min_gradient, maximum=limits.MAX_SPREAD)
+    for name, value in (("location.sigma", config.location.sigma), ("location.gate", config.location.gate)):
+        checks.number(f"TrackerConfig.{name}", value, maximum=limits.MAX_SPREAD)
+    checks.number("TrackerConfig.location.sigma", config.location.sigma, minimum=MIN_SIGMA)
+    checks.number("TrackerConfig.detections.sigma", config.detections.sigma, minimum=MIN_SIGMA,
+                  maximum=MAX_CUE_SIGMA)
+    checks.number("TrackerConfig.adaptive_fusion.epsilon", config.adaptive_fusion.epsilon, maximum=1.0)
+    initiation = config.initiation
+    if initiation is not None:
+        for name in ("appear_frames", "exit_frames", "lost_frames", "coast_frames", "duplicate_frames", "memory"):
+            value = getattr(initiation, name, None)
+            if value is not None:
+                checks.integer(f"TrackerConfig.initiation.{name}", value, maximum=limits.MAX_FRAMES)
+        for name in ("border", "opening"):
+            checks.integer(f"TrackerConfig.initiation.{name}", getattr(initiation, name), maximum=MAX_MASK_PIXELS)
+        for name in ("max_aspect", "appearance_weight", "centre_gain"):
+            value = getattr(initiation, name, None)
+            if value is not None:
+                checks.number(f"TrackerConfig.initiation.{name}", value, maximum=limits.MAX_SPREAD)
+
+
 def _check_keys(mapping: Mapping[str, Any], known: list[str], where: str, nested: Mapping[str, type] = {}) -> None:
     """Refuse a key of ``mapping`` not in ``known``; a key of a ``nested`` table is named with its table."""
     unknown = [key for key in mapping if key not in known]
     if unknown:
         home = next((table for table, kind in nested.items() if unknown[0] in {f.name for f in fields(kind)}), None)
         hint = f"; {unknown[0]} is a setting of the {home} table: {home}.{unknown[0]}" if home else ""
-        raise TrackingError(f"{where}: unknown key {unknown[0]!r}{hint}; known keys: {', '.join(known)}")
+        raise TrackingError(f"{where}: unknown key {shown(unknown[0])}{hint}; known keys: {', '.join(known)}")
 
 
 def _dataclass(kind: type, value: Any, where: str):
     if not isinstance(value, Mapping):
-        raise TrackingError(f"{where} must be a table of {kind.__name__} settings, got {value!r}")
+        raise TrackingError(f"{where} must be a table of {kind.__name__} settings, got {shown(value)}")
     _check_keys(value, [f.name for f in fields(kind)], where)
     values = {k: tuple(v) if isinstance(v, list) else v for k, v in value.items()}
     try:
         return kind(**values)
-    except (BeliefError, TypeError) as exc:
-        raise TrackingError(f"{where}: {exc}") from None
+    except (BeliefError, TypeError, ValueError, OverflowError) as exc:
+        raise TrackingError(f"{where}: {limits.clipped(str(exc))}") from None

@@ -47,6 +47,7 @@ from typing import Optional, Protocol
 import numpy as np
 
 from .errors import TrackingError
+from .limits import shown as _shown
 
 __all__ = [
     "STATE",
@@ -94,10 +95,12 @@ def _real(name: str, value: object) -> float:
     """``value`` as a finite float; a bool, a non-number or ±inf/NaN raises :class:`TrackingError`."""
     if isinstance(value, bool):
         raise TrackingError(f"{name} must be a real number, got {value!r}")
+    if isinstance(value, (str, bytes)):
+        raise TrackingError(f"{name} must be a real number, got {_shown(value)}")
     try:
         number = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise TrackingError(f"{name} must be a real number, got {value!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise TrackingError(f"{name} must be a real number, got {_shown(value)}") from None
     if not math.isfinite(number):
         raise TrackingError(f"{name} must be finite, got {value!r}")
     return number
@@ -114,7 +117,7 @@ def _count(name: str, value: object, minimum: int = 1) -> int:
     try:
         number = operator.index(value)  # type: ignore[arg-type]
     except TypeError:
-        raise TrackingError(f"{name} must be an integer, got {value!r}") from None
+        raise TrackingError(f"{name} must be an integer, got {_shown(value)}") from None
     if number < minimum:
         raise TrackingError(f"{name} must be at least {minimum}, got {number}")
     return number
@@ -148,6 +151,12 @@ def _warn_degenerate(what: str) -> None:
 
 
 # -- motion ---------------------------------------------------------------------------------------
+
+#: The largest standard deviation of the motion noise, in pixels (MOT coordinates stay within ±10^6).
+MAX_MOTION_SPREAD = 1e6
+
+#: The largest time step of the motion model, in frames.
+MAX_DT = 1000.0
 
 
 @dataclass(frozen=True)
@@ -189,10 +198,14 @@ class MotionConfig:
 
     def __post_init__(self) -> None:
         for name in ("sigma_pos", "sigma_vel"):
-            object.__setattr__(self, name, _non_negative(f"MotionConfig.{name}", getattr(self, name)))
+            value = _non_negative(f"MotionConfig.{name}", getattr(self, name))
+            # A spread beyond any frame puts every particle on the image's border (run checks: the diagonal).
+            if value > MAX_MOTION_SPREAD:
+                raise TrackingError(f"MotionConfig.{name} must be at most {MAX_MOTION_SPREAD:g} px, got {value!r}")
+            object.__setattr__(self, name, value)
         dt = _real("MotionConfig.dt", self.dt)
-        if dt <= 0:
-            raise TrackingError(f"MotionConfig.dt must be positive, got {self.dt!r}")
+        if not 0 < dt <= MAX_DT:
+            raise TrackingError(f"MotionConfig.dt must be positive and at most {MAX_DT:g} frames, got {self.dt!r}")
         object.__setattr__(self, "dt", dt)
 
     def noise_std(self) -> np.ndarray:

@@ -19,13 +19,13 @@ from os import PathLike
 
 import numpy as np
 
-from . import outputs
+from . import limits, outputs
 from .config import TrackerConfig
 from .detections import Detections, check_detections
 from .errors import DetectionFileError, InitError, TrackingError
 from .extras import require
 from .initiation import InitPlan
-from .motfiles import read_mot
+from .motfiles import check_ground_truth, read_mot
 from .outdir import OutputFolder, input_paths
 from .sources import FrameSource, open_source
 from .tracker import Tracker
@@ -185,7 +185,10 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(),
         raise
     try:
         gt_rows = _ground_truth(gt)
+        if gt_rows is not None:
+            check_ground_truth(gt_rows, frames.count, str(gt) if isinstance(gt, (str, PathLike)) else "the ground truth")
         _check_fit(frames, init, detections)
+        limits.check_run(config, frames, init)
         tracker = start_tracker(config, init, seed, frames)
         timing = Timing(started)
         tracks = TracksWriter(staged.path("tracks.txt"))

@@ -51,13 +51,16 @@ from __future__ import annotations
 import configparser
 import os
 import re
+import stat
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from os import PathLike
 from pathlib import Path
 
 import numpy as np
 
+from . import limits
 from .errors import TrackingError, VideoError
+from .limits import shown
 
 __all__ = ["FrameSource", "open_source", "IMAGE_EXTENSIONS"]
 
@@ -199,18 +202,24 @@ def open_source(source) -> FrameSource:
     """
     if isinstance(source, FrameSource):
         return source
-    if isinstance(source, (str, PathLike)):
-        text = os.fspath(source)
+    text = limits.path_text(source)
+    if text is not None:
         path = Path(text)
-        if path.is_dir():
-            if (path / "seqinfo.ini").is_file():
+        try:
+            info = os.stat(text)
+        except (FileNotFoundError, NotADirectoryError):
+            info = None
+        except OSError as exc:         # a name too long, a loop of links, no permission
+            raise VideoError(f"cannot read {shown(text)}: {exc.strerror or exc}") from None
+        if info is not None and stat.S_ISDIR(info.st_mode):
+            if os.path.lexists(path / "seqinfo.ini"):
                 return _sequence(path)
             return _image_folder(path)
-        if not path.exists() and "%" in text:
+        if info is None and "%" in text:
             return _pattern(text)
         from .video import VideoReader
 
-        reader = VideoReader(source)
+        reader = VideoReader(text)
         return FrameSource(reader, name=text, width=reader.width, height=reader.height, fps=reader.fps,
                            count=reader.frame_count, reader=reader, path=text, kind="video")
     scene_config = getattr(source, "config", None)
@@ -241,11 +250,22 @@ def _natural_key(path: Path) -> list:
 
 
 def _listed_images(folder: Path, extensions: Sequence[str] = IMAGE_EXTENSIONS) -> list[Path]:
+    """The regular image files of ``folder`` in natural order; more than :data:`limits.MAX_FRAMES` is refused."""
+    files = []
     try:
-        entries = list(folder.iterdir())
+        with os.scandir(folder) as entries:
+            for entry in entries:
+                name = entry.name
+                if name.startswith(".") or os.path.splitext(name)[1].lower() not in extensions:
+                    continue
+                # entry.is_file follows links and is False for FIFOs and devices, which a read would block on.
+                if entry.is_file():
+                    files.append(Path(entry.path))
+                    if len(files) > limits.MAX_FRAMES:
+                        limits.check_frames(len(files), f"the folder {shown(str(folder))}",
+                                            "images or more")
     except OSError as exc:
-        raise VideoError(f"cannot read the folder {str(folder)!r}: {exc.strerror or exc}") from None
-    files = [f for f in entries if f.suffix.lower() in extensions and not f.name.startswith(".") and f.is_file()]
+        raise VideoError(f"cannot read the folder {shown(str(folder))}: {exc.strerror or exc}") from None
     return sorted(files, key=_natural_key)
 
 
@@ -253,75 +273,122 @@ def _image_folder(folder: Path) -> FrameSource:
     files = _listed_images(folder)
     if not files:
         hint = " (a MOTChallenge sequence folder needs its seqinfo.ini)" if (folder / "img1").is_dir() else ""
-        raise VideoError(f"cannot read the folder {str(folder)!r}: it holds no image file "
+        raise VideoError(f"cannot read the folder {shown(str(folder))}: it holds no image file "
                          f"({', '.join(IMAGE_EXTENSIONS[:7])}, ...){hint}")
     return _images(files, str(folder), "images")
 
 
+#: One printf-style integer conversion of an image pattern, with its flags, width and precision.
+_CONVERSION = re.compile(r"%(?P<flags>[-+ 0#]*)(?P<width>\d*)(?:\.(?P<precision>\d*))?(?P<type>[diu])")
+
+
+def _pattern_number(pattern: str) -> bool:
+    """Whether ``pattern`` has exactly one integer conversion (``%06d``) and otherwise only ``%%``.
+
+    The pattern is checked before it is formatted: ``%300000000d`` would make a name of 300
+    million characters for every frame tried.
+    """
+    numbers = 0
+    k = 0
+    while True:
+        k = pattern.find("%", k)
+        if k < 0:
+            return numbers == 1
+        if pattern.startswith("%%", k):
+            k += 2
+            continue
+        match = _CONVERSION.match(pattern, k)
+        if match is None:
+            return False
+        for part in ("width", "precision"):
+            digits = match.group(part) or "0"
+            if len(digits) > 3 or int(digits) > limits.MAX_PATTERN_WIDTH:
+                raise VideoError(f"cannot read the image pattern {shown(pattern)}: a number {part} of "
+                                 f"{limits.clipped(digits)}, more than {limits.MAX_PATTERN_WIDTH} digits")
+        numbers += 1
+        k = match.end()
+
+
 def _pattern(pattern: str) -> FrameSource:
-    try:
-        names = pattern % 0, pattern % 1
-    except (TypeError, ValueError, OverflowError):
-        names = (pattern, pattern)
-    if names[0] == names[1]:
-        raise VideoError(f"cannot read {pattern!r}: no such file, and not an image pattern with one number "
+    if not _pattern_number(pattern):
+        raise VideoError(f"cannot read {shown(pattern)}: no such file, and not an image pattern with one number "
                          "(such as img1/%06d.jpg)")
+    names = pattern % 0, pattern % 1
     start = next((k for k, name in enumerate(names) if os.path.isfile(name)), None)
     if start is None:
-        raise VideoError(f"cannot read the image pattern {pattern!r}: neither {names[0]!r} nor {names[1]!r} exists")
+        raise VideoError(f"cannot read the image pattern {shown(pattern)}: neither {shown(names[0])} nor "
+                         f"{shown(names[1])} exists")
     files = []
-    # Counting the files is a stat each, cheap next to decoding, and gives the run its length.
+    # Counting the files is a stat each, cheap next to decoding, and gives the run its length;
+    # os.path.isfile is False for FIFOs and devices.
     while os.path.isfile(pattern % (start + len(files))):
         files.append(pattern % (start + len(files)))
+        if len(files) > limits.MAX_FRAMES:
+            limits.check_frames(len(files), f"the image pattern {shown(pattern)}", "images or more")
     return _images(files, pattern, "pattern")
 
 
-def _sequence(folder: Path) -> FrameSource:
-    from belief.textfiles import read_text
+#: A whole number of seqinfo.ini: digits only (Python's int would take ``1_000`` and `` +1``).
+_WHOLE = re.compile(r"\+?[0-9]{1,100}")
+#: A decimal number of seqinfo.ini (no ``inf``, ``nan``, underscores or hexadecimal).
+_DECIMAL = re.compile(r"\+?(?:[0-9]{1,19}(?:\.[0-9]{0,19})?|\.[0-9]{1,19})(?:[eE][-+]?[0-9]{1,3})?")
 
+
+def _sequence(folder: Path) -> FrameSource:
     ini = folder / "seqinfo.ini"
-    where = str(ini)
+    where = limits.clipped(str(ini))
     parser = configparser.ConfigParser(interpolation=None)
+    text = limits.read_small_text(ini, "sequence description", VideoError, encoding="utf-8-sig")
     try:
-        parser.read_string(read_text(ini, "sequence description", VideoError, encoding="utf-8-sig"), source=where)
+        parser.read_string(text, source=where)
     except configparser.Error as exc:
-        raise VideoError(f"{where}: not a valid INI file ({str(exc).splitlines()[0]})") from None
+        raise VideoError(f"{where}: not a valid INI file ({limits.clipped(str(exc).splitlines()[0])})") from None
     if not parser.has_section("Sequence"):
         raise VideoError(f"{where}: no [Sequence] section")
     info = parser["Sequence"]  # keys are case-insensitive: imDir, imdir and IMDIR are the same
 
-    def number(key: str, kind: type, default=None):
+    def number(key: str, kind: type, default=None, maximum: float | None = None):
         text = info.get(key)
         if text is None or not text.strip():
             return default
-        try:
-            value = kind(text.strip())
-        except ValueError:
-            value = None
-        if value is None or not np.isfinite(value) or value <= 0:
+        text = text.strip()
+        pattern = _WHOLE if kind is int else _DECIMAL
+        value = kind(text) if pattern.fullmatch(text) else None
+        if value is None or not value > 0:
             raise VideoError(f"{where}: {key} must be a positive {'whole ' if kind is int else ''}number, "
-                             f"got {text.strip()!r}")
+                             f"got {shown(text)}")
+        if maximum is not None and value > maximum:
+            raise VideoError(f"{where}: {key} = {text} is more than {maximum:g}")
         return value
 
     im_dir = (info.get("imDir") or "").strip()
     if not im_dir:
         raise VideoError(f"{where}: no imDir (the folder of the frames, as in imDir=img1)")
-    fps = number("frameRate", float, 25.0)
+    fps = number("frameRate", float, 25.0, limits.MAX_FPS)
     length = number("seqLength", int)
     width, height = number("imWidth", int), number("imHeight", int)
+    if length is not None:
+        limits.check_frames(length, where, "frames (seqLength)")
+    if width is not None and height is not None:
+        limits.check_pixels(width, height, where)
     extension = (info.get("imExt") or ".jpg").strip()
     extension = extension if extension.startswith(".") else "." + extension
+    if len(extension) > 16 or any(c in extension for c in "/\\%\x00"):
+        raise VideoError(f"{where}: imExt must be a file extension such as .jpg, got {shown(extension)}")
     images = folder / im_dir
     if not images.is_dir():
-        raise VideoError(f"{where}: imDir={im_dir} but {str(images)!r} is not a folder")
+        raise VideoError(f"{where}: imDir={limits.clipped(im_dir)} but {shown(str(images))} is not a folder")
     if length is not None:
-        files = [images / f"{k:06d}{extension}" for k in range(1, length + 1)]
-        missing = next((f for f in files if not f.is_file()), None)
-        if missing is not None:
-            raise VideoError(f"{where}: seqLength={length} but the frame {str(missing)!r} is missing")
+        files = []
+        # One stat a frame, stopping at the first missing one: a seqLength of 10^7 with no frames ends at once.
+        for k in range(1, length + 1):
+            file = images / f"{k:06d}{extension}"
+            if not file.is_file():
+                raise VideoError(f"{where}: seqLength={length} but the frame {shown(str(file))} is missing")
+            files.append(file)
     else:
         files = _listed_images(images, (extension.lower(),))
         if not files:
-            raise VideoError(f"{where}: no {extension} image in {str(images)!r}")
+            raise VideoError(f"{where}: no {extension} image in {shown(str(images))}")
     size = (width, height) if width is not None and height is not None else None
     return _images(files, str(folder), "sequence", fps=fps, size=size)

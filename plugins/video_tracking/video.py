@@ -10,6 +10,7 @@ frames and writes a Motion-JPEG ``.avi``.
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import sys
 import time
@@ -19,8 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
+from . import limits
 from .errors import VideoError
 from .extras import require
+from .limits import shown
 
 cv2 = require("cv2")
 
@@ -59,28 +62,39 @@ class VideoReader:
 
     def __init__(self, path: str | PathLike[str]) -> None:
         self.path = str(path)
-        file = Path(path)
-        if not file.exists():
-            raise VideoError(f"cannot read video {self.path!r}: no such file")
-        if file.is_dir():
-            raise VideoError(f"cannot read video {self.path!r}: it is a directory")
+        name = shown(self.path)
+        # A FIFO would block OpenCV's open and /dev/zero would be read without end: regular files only.
+        limits.regular_file(path, "video", VideoError)
+        self._capture = None
         with _quiet_native_stderr():
             self._capture = cv2.VideoCapture(self.path)
         if not self._capture.isOpened():
-            raise VideoError(f"cannot read video {self.path!r}: OpenCV cannot open it (not a video, or an "
+            raise VideoError(f"cannot read video {name}: OpenCV cannot open it (not a video, or an "
                              "unsupported codec)")
         self.decode_seconds = 0.0
         self.decoded = 0
-        first = self._read()
-        if first is None:
+        try:
+            # The container's size is checked before a frame is decoded: one frame of 10 000 x 10 000 is 300 MB.
+            width, height = (_property(self._capture, prop) for prop in (cv2.CAP_PROP_FRAME_WIDTH,
+                                                                          cv2.CAP_PROP_FRAME_HEIGHT))
+            if width and height:
+                limits.check_pixels(int(width), int(height), f"video {name}")
+            count = _property(self._capture, cv2.CAP_PROP_FRAME_COUNT)
+            self.frame_count = int(count) if count and count >= 1 else None
+            if self.frame_count is not None:
+                limits.check_frames(self.frame_count, f"video {name}", "frames announced by its container")
+            first = self._read()
+            if first is None:
+                raise VideoError(f"cannot read video {name}: no frame could be decoded")
+            self.height, self.width = first.shape[:2]
+            limits.check_pixels(self.width, self.height, f"video {name}")
+        except BaseException:
             self.close()
-            raise VideoError(f"cannot read video {self.path!r}: no frame could be decoded")
+            raise
         self._first: np.ndarray | None = first
-        self.height, self.width = first.shape[:2]
-        fps = float(self._capture.get(cv2.CAP_PROP_FPS) or 0.0)
-        self.fps = fps if fps > 0 else 25.0
-        count = int(self._capture.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
-        self.frame_count = count if count > 0 else None
+        fps = _property(self._capture, cv2.CAP_PROP_FPS)
+        # A damaged container may claim any rate; an absurd one is taken for none.
+        self.fps = fps if fps and 0 < fps <= limits.MAX_FPS else 25.0
 
     def _read(self) -> np.ndarray | None:
         start = time.perf_counter()
@@ -103,19 +117,29 @@ class VideoReader:
             if frame is None:
                 return
             if frame.shape[:2] != (self.height, self.width):
-                raise VideoError(f"{self.path}: a frame of size {frame.shape[1]}x{frame.shape[0]} in a "
+                raise VideoError(f"{limits.clipped(self.path)}: a frame of size {frame.shape[1]}x{frame.shape[0]} in a "
                                  f"{self.width}x{self.height} video")
             yield frame
 
     def close(self) -> None:
         """Release the file."""
-        self._capture.release()
+        if self._capture is not None:
+            self._capture.release()
 
     def __enter__(self) -> VideoReader:
         return self
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _property(capture, prop: int) -> float:
+    """A property of a capture as a finite float, 0 when OpenCV gives none or a non-finite one."""
+    try:
+        value = float(capture.get(prop) or 0.0)
+    except (TypeError, ValueError, OverflowError):
+        return 0.0
+    return value if math.isfinite(value) else 0.0
 
 
 @contextlib.contextmanager
@@ -200,28 +224,44 @@ class ImageSequenceReader:
         first = self._decode(0)
         height, width = first.shape[:2]
         if size is not None and tuple(size) != (width, height):
-            raise VideoError(f"{self.files[0]}: image of size {width}x{height}, but {name} says "
+            raise VideoError(f"{limits.clipped(self.files[0])}: image of size {width}x{height}, but "
+                             f"{limits.clipped(name)} says "
                              f"{size[0]}x{size[1]}")
         self.width, self.height = width, height
 
     def _decode(self, index: int) -> np.ndarray:
         file = self.files[index]
+        name = shown(file)
         start = time.perf_counter()
+        info = limits.regular_file(file, "image", VideoError)
+        limits.check_image_file(file, info.st_size)
         # imdecode of the bytes rather than imread: imread prints its own warnings to the
         # terminal and cannot tell a missing file from one it cannot decode.
         try:
-            data = np.fromfile(file, dtype=np.uint8)
+            data = np.fromfile(file, dtype=np.uint8, count=limits.image_bytes_limit() + 1)
         except OSError as exc:
-            raise VideoError(f"cannot read image {file!r}: {exc.strerror or exc}") from None
+            raise VideoError(f"cannot read image {name}: {exc.strerror or exc}") from None
+        # OpenCV allocates the whole image before it decodes a pixel: the header's size is checked first.
+        size = limits.image_size(data[:1 << 16].tobytes())
+        if size is None:
+            self.decode_seconds += time.perf_counter() - start
+            raise VideoError(f"cannot read image {name}: OpenCV cannot decode it (not an image, or an "
+                             "unsupported format: its header is not one of PNG, JPEG, BMP, TIFF, WebP, JPEG 2000 "
+                             "or Netpbm)")
+        limits.check_pixels(size[0], size[1], f"image {name}")
+        if self.width and size != (self.width, self.height):
+            raise VideoError(f"image {name} has size {size[0]}x{size[1]}, the earlier "
+                             f"images of {limits.clipped(self.name)} {self.width}x{self.height}")
         with _quiet_native_stderr():     # OpenCV's warning about a damaged image: the error below says it
             image = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
         self.decode_seconds += time.perf_counter() - start
         if image is None:
-            raise VideoError(f"cannot read image {file!r}: OpenCV cannot decode it (not an image, or "
+            raise VideoError(f"cannot read image {name}: OpenCV cannot decode it (not an image, or "
                              "an unsupported format)")
         if self.width and image.shape[:2] != (self.height, self.width):
-            raise VideoError(f"image {file!r} has size {image.shape[1]}x{image.shape[0]}, the earlier "
-                             f"images of {self.name} {self.width}x{self.height}")
+            raise VideoError(f"image {name} has size {image.shape[1]}x{image.shape[0]}, the earlier "
+                             f"images of {limits.clipped(self.name)} {self.width}x{self.height}")
+        limits.check_pixels(image.shape[1], image.shape[0], f"image {name}")
         return np.ascontiguousarray(image, dtype=np.uint8)
 
     def read(self, index: int) -> np.ndarray:
