@@ -34,7 +34,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .boxes import check_boxes, iou
+from .boxes import check_boxes, intersections, iou
 from .errors import TrackingError
 from .extras import require
 from .motfiles import MAX_COORDINATE, MAX_FRAME
@@ -260,8 +260,9 @@ def _track_table(rows: Any, what: str, allow_empty: bool) -> np.ndarray:
         raise TrackingError(f"{what} has a box coordinate or size beyond {MAX_COORDINATE:g} pixels")
     if (array[:, [_W, _H]] < 0).any():
         raise TrackingError(f"{what} has a box with a negative width or height")
-    keys = np.unique(array[:, :2], axis=0)
-    if len(keys) != len(array):
+    # One int64 per (frame, id): a sort of N numbers rather than of N rows.
+    keys = array[:, _FRAME].astype(np.int64) * 2**32 + (array[:, _ID].astype(np.int64) + MAX_FRAME)
+    if len(np.unique(keys)) != len(array):
         raise TrackingError(f"{what} has the same id twice in one frame")
     return array
 
@@ -270,10 +271,61 @@ def _centres(table: np.ndarray) -> np.ndarray:
     return table[:, [_X, _Y]] + table[:, [_W, _H]] / 2.0
 
 
-def _accumulate(gt: Any, hyp: Any, max_iou_distance: float):
-    """The motmetrics accumulator of :func:`evaluate`, the sorted rows, and the dropped hypotheses."""
+class _Matching(NamedTuple):
+    """The CLEAR MOT correspondences of :func:`evaluate`, as ``motmetrics.MOTAccumulator`` makes them.
+
+    ``pairs`` holds one row per MATCH or SWITCH event, in the accumulator's event order:
+    frame, gt row, hypothesis row (indices into ``gt_rows`` and ``hyp_rows``), and whether it is a
+    switch.  ``overlaps`` counts, per (target id, track id), the frames in which the two may be
+    paired (IoU within the threshold): the "true positives" of the IDF1 assignment.
+    """
+
+    gt_rows: np.ndarray
+    hyp_rows: np.ndarray
+    pairs: np.ndarray
+    distance_sum: float
+    misses: int
+    false_positives: int
+    num_objects: int
+    num_predictions: int
+    ignored_predictions: int
+    num_frames: int
+    object_frames: dict
+    track_frames: dict
+    overlaps: dict
+
+
+def _distances(gt_boxes: np.ndarray, hyp_boxes: np.ndarray, max_iou_distance: float) -> np.ndarray:
+    """:func:`iou_distance` of boxes already checked (the same floats, without checking every frame again)."""
+    inter = intersections(gt_boxes, hyp_boxes)
+    union = (gt_boxes[:, None, 2] * gt_boxes[:, None, 3] + hyp_boxes[None, :, 2] * hyp_boxes[None, :, 3]) - inter
+    distance = 1.0 - np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
+    distance[distance > max_iou_distance] = np.nan
+    return distance
+
+
+def _assignment(distance: np.ndarray, solve) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs of finite distance of motmetrics' Hungarian assignment on ``distance`` (NaN: may not pair)."""
+    finite = np.isfinite(distance)
+    if (finite.sum(axis=0) <= 1).all() and (finite.sum(axis=1) <= 1).all():
+        # No row or column has a choice: the assignment takes every finite pair (the solver's
+        # forbidden pairs cost more than all finite ones together), in row order as the solver returns them.
+        return np.nonzero(finite)
+    rows, cols = solve(distance)
+    kept = np.isfinite(distance[rows, cols])
+    return rows[kept], cols[kept]
+
+
+def _accumulate(gt: Any, hyp: Any, max_iou_distance: float) -> _Matching:
+    """The CLEAR MOT matching of :func:`evaluate`, frame by frame, with motmetrics' rules and solver.
+
+    The events are those ``motmetrics.MOTAccumulator.update`` records (carry the previous frame's
+    pairs over, pair the rest by the Hungarian algorithm, a pair whose target had another track
+    before is a switch), kept as arrays: memory grows with the rows and the overlapping pairs,
+    not with the product of the numbers of ids, and the per-frame cost with the frame's boxes.
+    """
     try:
-        motmetrics = require("motmetrics")
+        require("motmetrics")
         from motmetrics.lap import linear_sum_assignment
     except ImportError as exc:  # pragma: no cover - motmetrics is a dependency
         raise TrackingError(f"evaluation needs the motmetrics package ({exc})") from None
@@ -282,53 +334,194 @@ def _accumulate(gt: Any, hyp: Any, max_iou_distance: float):
     hyp_rows = _track_table(hyp, "the hypotheses", allow_empty=True)
     if not (gt_rows[:, _FLAG] != 0).any():
         raise TrackingError("the ground truth has no scored row (every row has flag 0)")
+    if not 0.0 <= max_iou_distance <= 1.0:
+        raise TrackingError(f"max_iou_distance must be in [0, 1], got {max_iou_distance}")
 
     gt_rows = gt_rows[np.argsort(gt_rows[:, _FRAME], kind="stable")]
     hyp_rows = hyp_rows[np.argsort(hyp_rows[:, _FRAME], kind="stable")]
     frames = np.union1d(gt_rows[:, _FRAME], hyp_rows[:, _FRAME]).astype(int)
-    gt_starts = np.searchsorted(gt_rows[:, _FRAME], frames, side="left")
-    gt_stops = np.searchsorted(gt_rows[:, _FRAME], frames, side="right")
-    hyp_starts = np.searchsorted(hyp_rows[:, _FRAME], frames, side="left")
-    hyp_stops = np.searchsorted(hyp_rows[:, _FRAME], frames, side="right")
+    gt_starts = np.searchsorted(gt_rows[:, _FRAME], frames, side="left").tolist()
+    gt_stops = np.searchsorted(gt_rows[:, _FRAME], frames, side="right").tolist()
+    hyp_starts = np.searchsorted(hyp_rows[:, _FRAME], frames, side="left").tolist()
+    hyp_stops = np.searchsorted(hyp_rows[:, _FRAME], frames, side="right").tolist()
+    gt_ids, hyp_ids = gt_rows[:, _ID].astype(np.int64), hyp_rows[:, _ID].astype(np.int64)
+    gt_boxes, hyp_boxes = gt_rows[:, _X:_FLAG], hyp_rows[:, _X:_FLAG]
+    scored_rows = gt_rows[:, _FLAG] != 0
+    kept_rows = np.ones(len(hyp_rows), dtype=bool)
 
-    accumulator = motmetrics.MOTAccumulator(auto_id=False)
-    ignored_predictions = 0
-    for frame, g0, g1, h0, h1 in zip(frames, gt_starts, gt_stops, hyp_starts, hyp_stops):
-        frame_gt = gt_rows[g0:g1]
-        frame_hyp = hyp_rows[h0:h1]
-        distance = iou_distance(frame_gt[:, _X:_FLAG], frame_hyp[:, _X:_FLAG], max_iou_distance)
-        scored = frame_gt[:, _FLAG] != 0
-        kept = np.ones(len(frame_hyp), dtype=bool)
-        if not scored.all() and len(frame_hyp):
+    previous: dict[int, int] = {}                       # target id -> track id of its last pair
+    pairs: list[tuple[int, int, int, bool]] = []
+    # The distances of the accumulator's events that are not RAW, in event order, 0 for a miss
+    # or a false positive: motmetrics' MOTP sums this column, and so does this, to the same float.
+    distances: list[np.ndarray] = []
+    overlap_gt: list[np.ndarray] = []
+    overlap_hyp: list[np.ndarray] = []
+    misses = false_positives = 0
+    for frame, g0, g1, h0, h1 in zip(frames.tolist(), gt_starts, gt_stops, hyp_starts, hyp_stops):
+        scored = scored_rows[g0:g1]
+        if g0 == g1 or h0 == h1:
+            misses += int(scored.sum())
+            false_positives += h1 - h0
+            distances.append(np.zeros(int(scored.sum()) + h1 - h0))
+            continue
+        distance = _distances(gt_boxes[g0:g1], hyp_boxes[h0:h1], max_iou_distance)
+        if not scored.all():
             # MOTChallenge protocol: match against all ground truth, drop what matched an ignored box.
-            for i, j in zip(*linear_sum_assignment(distance)):
-                if np.isfinite(distance[i, j]) and not scored[i]:
+            kept = np.ones(h1 - h0, dtype=bool)
+            for i, j in zip(*_assignment(distance, linear_sum_assignment)):
+                if not scored[i]:
                     kept[j] = False
-            ignored_predictions += int((~kept).sum())
-        accumulator.update(
-            frame_gt[scored, _ID].astype(int),
-            frame_hyp[kept, _ID].astype(int),
-            distance[np.ix_(scored, kept)],
-            frameid=int(frame),
-        )
+            kept_rows[h0:h1] = kept
+            gt_index, hyp_index = np.flatnonzero(scored) + g0, np.flatnonzero(kept) + h0
+            distance = distance[np.ix_(scored, kept)]
+        else:
+            gt_index, hyp_index = np.arange(g0, g1), np.arange(h0, h1)
+        oids, hids = gt_ids[gt_index], hyp_ids[hyp_index]
+        finite_i, finite_j = np.nonzero(np.isfinite(distance))
+        overlap_gt.append(oids[finite_i])
+        overlap_hyp.append(hids[finite_j])
+        frame_distances: list[float] = []
+        gt_done = np.zeros(len(oids), dtype=bool)
+        hyp_done = np.zeros(len(hids), dtype=bool)
+        if len(finite_i):
+            # 1. Pairs of the previous frames that are still within the threshold carry over.
+            column_of = {h: j for j, h in enumerate(hids.tolist())}
+            for i, o in enumerate(oids.tolist()):
+                j = column_of.get(previous.get(o))
+                if j is not None and not hyp_done[j] and np.isfinite(distance[i, j]):
+                    gt_done[i] = hyp_done[j] = True
+                    pairs.append((frame, int(gt_index[i]), int(hyp_index[j]), False))
+                    frame_distances.append(distance[i, j])
+            # 2. The others by the Hungarian algorithm; a target paired with another track before switches.
+            rest = distance.copy()
+            rest[gt_done, :] = np.nan
+            rest[:, hyp_done] = np.nan
+            if np.isfinite(rest).any():
+                for i, j in zip(*_assignment(rest, linear_sum_assignment)):
+                    o, h = int(oids[i]), int(hids[j])
+                    pairs.append((frame, int(gt_index[i]), int(hyp_index[j]), o in previous and previous[o] != h))
+                    frame_distances.append(rest[i, j])
+                    gt_done[i] = hyp_done[j] = True
+                    previous[o] = h
+        frame_misses, frame_false = int((~gt_done).sum()), int((~hyp_done).sum())
+        misses += frame_misses
+        false_positives += frame_false
+        distances.append(np.concatenate([np.asarray(frame_distances, dtype=np.float64),
+                                         np.zeros(frame_misses + frame_false)]))
 
-    return accumulator, gt_rows, hyp_rows, ignored_predictions
+    scored_ids = gt_ids[scored_rows]
+    kept_ids = hyp_ids[kept_rows]
+    objects, object_counts = np.unique(scored_ids, return_counts=True)
+    tracks, track_counts = np.unique(kept_ids, return_counts=True)
+    overlaps: dict[tuple[int, int], int] = {}
+    if overlap_gt:
+        both = np.column_stack([np.concatenate(overlap_gt), np.concatenate(overlap_hyp)])
+        if len(both):
+            unique_pairs, pair_counts = np.unique(both, axis=0, return_counts=True)
+            overlaps = {(int(o), int(h)): int(c) for (o, h), c in zip(unique_pairs.tolist(), pair_counts.tolist())}
+    return _Matching(
+        gt_rows=gt_rows, hyp_rows=hyp_rows,
+        pairs=np.array(pairs, dtype=np.int64).reshape(-1, 4),
+        distance_sum=float(np.concatenate(distances).sum()) if distances else 0.0,
+        misses=misses, false_positives=false_positives,
+        num_objects=len(scored_ids), num_predictions=len(kept_ids),
+        ignored_predictions=int((~kept_rows).sum()), num_frames=len(frames),
+        object_frames=dict(zip(objects.tolist(), object_counts.tolist())),
+        track_frames=dict(zip(tracks.tolist(), track_counts.tolist())),
+        overlaps=overlaps)
 
 
-def _pairs(accumulator, gt_rows: np.ndarray, hyp_rows: np.ndarray) -> np.ndarray:
+def _pairs(matching: _Matching) -> np.ndarray:
     """Rows ``frame, gt id, hypothesis id, centre error`` of the pairs of every frame."""
-    # The event table also repeats a pair as a TRANSFER / ASCEND / MIGRATE event; only MATCH
-    # and SWITCH are the pairs of the frame.
-    events = accumulator.mot_events
-    pairs = events[events["Type"].isin(["MATCH", "SWITCH"])]
-    frames = pairs.index.get_level_values("FrameId").to_numpy(dtype=int)
-    gt_ids, hyp_ids = pairs["OId"].to_numpy(dtype=int), pairs["HId"].to_numpy(dtype=int)
-    gt_index = {(int(f), int(i)): k for k, (f, i) in enumerate(gt_rows[:, :2])}
-    hyp_index = {(int(f), int(i)): k for k, (f, i) in enumerate(hyp_rows[:, :2])}
-    gt_pick = np.array([gt_index[(f, o)] for f, o in zip(frames, gt_ids)], dtype=int)
-    hyp_pick = np.array([hyp_index[(f, h)] for f, h in zip(frames, hyp_ids)], dtype=int)
-    errors = np.linalg.norm(_centres(gt_rows[gt_pick]) - _centres(hyp_rows[hyp_pick]), axis=1)
-    return np.column_stack([frames, gt_ids, hyp_ids, errors]).astype(np.float64).reshape(-1, 4)
+    frames, gt_pick, hyp_pick = matching.pairs[:, 0], matching.pairs[:, 1], matching.pairs[:, 2]
+    gt_rows, hyp_rows = matching.gt_rows[gt_pick], matching.hyp_rows[hyp_pick]
+    errors = np.linalg.norm(_centres(gt_rows) - _centres(hyp_rows), axis=1)
+    return np.column_stack([frames, gt_rows[:, _ID], hyp_rows[:, _ID], errors]).astype(np.float64).reshape(-1, 4)
+
+
+#: Up to this many target and track ids in all, the IDF1 assignment is solved on motmetrics' own dense
+#: (targets + tracks)² cost matrix with its solver (at most 2048² costs, 32 MB), so that among
+#: equally good assignments it picks the one motmetrics picks; beyond, on the overlapping pairs alone.
+DENSE_IDENTITY_IDS = 2048
+
+
+def _identity_assignment(matching: _Matching) -> tuple[dict[int, int], int]:
+    """The IDF1 global one-to-one assignment of targets to tracks, and its true positives (IDTP).
+
+    The assignment maximises the frames in which a target and its track may be paired
+    (Ristani et al. 2016), as motmetrics' ``id_global_assignment``.  Up to
+    :data:`DENSE_IDENTITY_IDS` ids it is that very computation (the same matrix and solver, so
+    the same assignment also where several are optimal).  Beyond, only pairs that ever overlap
+    can add to it, so it is solved on them alone as a sparse minimum-cost perfect matching
+    (scipy's LAPJVsp) with the same costs: the same IDTP, and memory that grows with the
+    overlapping pairs, not with the product of the numbers of ids.
+    """
+    if not matching.overlaps:
+        return {}, 0
+    if len(matching.object_frames) + len(matching.track_frames) <= DENSE_IDENTITY_IDS:
+        return _dense_identity_assignment(matching)
+    return _sparse_identity_assignment(matching)
+
+
+def _dense_identity_assignment(matching: _Matching) -> tuple[dict[int, int], int]:
+    """motmetrics' ``id_global_assignment``: a (targets + tracks)² matrix of false negatives plus false positives."""
+    from motmetrics.lap import linear_sum_assignment
+
+    objects, tracks = sorted(matching.object_frames), sorted(matching.track_frames)
+    no, nh = len(objects), len(tracks)
+    object_count = np.array([matching.object_frames[o] for o in objects], dtype=np.float64)
+    track_count = np.array([matching.track_frames[h] for h in tracks], dtype=np.float64)
+    costs = np.full((no + nh, no + nh), np.nan)
+    costs[no:, nh:] = 0.0
+    costs[:no, :nh] = object_count[:, None] + track_count[None, :]
+    costs[np.arange(no), nh + np.arange(no)] = object_count
+    costs[no + np.arange(nh), np.arange(nh)] = track_count
+    object_index = {o: i for i, o in enumerate(objects)}
+    track_index = {h: j for j, h in enumerate(tracks)}
+    for (target, track), count in matching.overlaps.items():
+        costs[object_index[target], track_index[track]] -= 2.0 * count
+    identities, idtp = {}, 0
+    for row, column in zip(*linear_sum_assignment(costs)):
+        if row < no and column < nh:
+            target, track = objects[row], tracks[column]
+            # A pair that never overlaps costs the same assigned or not: it is no identity.
+            count = matching.overlaps.get((target, track), 0)
+            if count > 0:
+                identities[int(target)] = int(track)
+                idtp += count
+    return identities, idtp
+
+
+def _sparse_identity_assignment(matching: _Matching) -> tuple[dict[int, int], int]:
+    """The assignment of :func:`_dense_identity_assignment` on the overlapping pairs alone (scipy's LAPJVsp)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import min_weight_full_bipartite_matching
+
+    keys = np.array(list(matching.overlaps), dtype=np.int64)
+    true_positives = np.array(list(matching.overlaps.values()), dtype=np.int64)
+    objects, object_index = np.unique(keys[:, 0], return_inverse=True)
+    tracks, track_index = np.unique(keys[:, 1], return_inverse=True)
+    a, b = len(objects), len(tracks)
+    object_cost = np.array([matching.object_frames[int(o)] for o in objects], dtype=np.float64)
+    track_cost = np.array([matching.track_frames[int(h)] for h in tracks], dtype=np.float64)
+    # Rows: targets, then one "no target" per track; columns: tracks, then one "no track" per target.
+    # Every perfect matching has a + b edges, so the 1 added to each cost keeps the optimum and
+    # keeps every edge a stored non-zero.
+    rows = np.concatenate([object_index, np.arange(a), a + np.arange(b), a + track_index])
+    cols = np.concatenate([track_index, b + np.arange(a), np.arange(b), b + object_index])
+    costs = np.concatenate([object_cost[object_index] + track_cost[track_index] - 2.0 * true_positives,
+                            object_cost, track_cost, np.zeros(len(keys))]) + 1.0
+    graph = coo_matrix((costs, (rows, cols)), shape=(a + b, a + b)).tocsr()
+    partner = min_weight_full_bipartite_matching(graph)[1]
+    identities, idtp = {}, 0
+    lookup = matching.overlaps
+    for row in range(a):
+        column = int(partner[row])
+        if column < b:
+            target, track = int(objects[row]), int(tracks[column])
+            identities[target] = track
+            idtp += lookup[(target, track)]
+    return identities, idtp
 
 
 def matched_pairs(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> np.ndarray:
@@ -354,8 +547,7 @@ def matched_pairs(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> np.nda
     >>> matched_pairs(gt, hyp)
     array([[1., 1., 7., 3.]])
     """
-    accumulator, gt_rows, hyp_rows, _ = _accumulate(gt, hyp, max_iou_distance)
-    return _pairs(accumulator, gt_rows, hyp_rows)
+    return _pairs(_accumulate(gt, hyp, max_iou_distance))
 
 
 def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
@@ -420,30 +612,31 @@ def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
     >>> nothing.mota, nothing.idf1, nothing.false_negatives, nothing.matched_pairs
     (0.0, 0.0, 3, 0)
     """
-    accumulator, gt_rows, hyp_rows, ignored_predictions = _accumulate(gt, hyp, max_iou_distance)
-    motmetrics = require("motmetrics")
-
-    names = ["mota", "motp", "idf1", "precision", "recall", "num_switches", "num_false_positives",
-             "num_misses", "num_detections", "num_objects", "num_predictions", "num_frames"]
-    summary = motmetrics.metrics.create().compute(accumulator, metrics=names, name="tracks").iloc[0]
-
-    centre_errors = _pairs(accumulator, gt_rows, hyp_rows)[:, 3]
+    matching = _accumulate(gt, hyp, max_iou_distance)
+    _, idtp = _identity_assignment(matching)
+    switches = int(matching.pairs[:, 3].sum())
+    detections = len(matching.pairs)
+    objects, predictions = matching.num_objects, matching.num_predictions
+    centre_errors = _pairs(matching)[:, 3]
     nan = float("nan")
 
+    def ratio(numerator: float, denominator: float) -> float:
+        return numerator / denominator if denominator else nan
+
     return Scores(
-        mota=float(summary["mota"]),
-        motp=1.0 - float(summary["motp"]) if summary["num_detections"] > 0 else nan,
-        idf1=float(summary["idf1"]),
-        precision=float(summary["precision"]),
-        recall=float(summary["recall"]),
-        id_switches=int(summary["num_switches"]),
-        false_positives=int(summary["num_false_positives"]),
-        false_negatives=int(summary["num_misses"]),
-        matched_pairs=int(summary["num_detections"]),
-        num_objects=int(summary["num_objects"]),
-        num_predictions=int(summary["num_predictions"]),
-        ignored_predictions=ignored_predictions,
-        num_frames=int(summary["num_frames"]),
+        mota=1.0 - ratio(matching.misses + switches + matching.false_positives, objects),
+        motp=1.0 - matching.distance_sum / detections if detections > 0 else nan,
+        idf1=ratio(2 * idtp, objects + predictions),
+        precision=ratio(detections, matching.false_positives + detections),
+        recall=ratio(detections, objects),
+        id_switches=switches,
+        false_positives=matching.false_positives,
+        false_negatives=matching.misses,
+        matched_pairs=detections,
+        num_objects=objects,
+        num_predictions=predictions,
+        ignored_predictions=matching.ignored_predictions,
+        num_frames=matching.num_frames,
         mean_centre_error=float(np.mean(centre_errors)) if len(centre_errors) else nan,
         median_centre_error=float(np.median(centre_errors)) if len(centre_errors) else nan,
     )
@@ -473,22 +666,10 @@ class IdentitySwaps(NamedTuple):
     identities: dict[int, int | None]
 
 
-def _idf1_identities(accumulator) -> dict[int, int | None]:
-    """Target id -> track id of the IDF1 global one-to-one assignment (motmetrics'), None if unassigned."""
-    motmetrics = require("motmetrics")
-    df_map = motmetrics.metrics.events_to_df_map(accumulator.events)
-    object_frames, track_frames, overlaps = motmetrics.metrics.extract_counts_from_df_map(df_map)
-    assignment = motmetrics.metrics.id_global_assignment(df_map)
-    # The assignment's rows and columns are the sorted ids, followed by one "unassigned" node each.
-    objects, tracks = sorted(object_frames), sorted(track_frames)
-    identities: dict[int, int | None] = {int(o): None for o in objects}
-    for row, column in zip(assignment["rids"], assignment["cids"]):
-        if row < len(objects) and column < len(tracks):
-            target, track = objects[row], tracks[column]
-            # A pair that never overlaps costs the same assigned or not: it is no identity.
-            if overlaps.get((target, track), 0) > 0:
-                identities[int(target)] = int(track)
-    return identities
+def _idf1_identities(matching: _Matching) -> dict[int, int | None]:
+    """Target id -> track id of the IDF1 global one-to-one assignment, None if unassigned."""
+    assigned, _ = _identity_assignment(matching)
+    return {int(o): assigned.get(int(o)) for o in sorted(matching.object_frames)}
 
 
 def _given_identities(identities: Any, targets: np.ndarray) -> dict[int, int | None]:
@@ -574,14 +755,15 @@ def identity_swaps(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5,
     >>> swaps.frames, swaps.pairs, swaps.identities
     (1, 2, {1: 7, 2: 8})
     """
-    accumulator, gt_rows, hyp_rows, _ = _accumulate(gt, hyp, max_iou_distance)
+    matching = _accumulate(gt, hyp, max_iou_distance)
     if identities is None:
-        identity = _idf1_identities(accumulator)
+        identity = _idf1_identities(matching)
     else:
+        gt_rows = matching.gt_rows
         identity = _given_identities(identities, np.unique(gt_rows[gt_rows[:, _FLAG] != 0, _ID]))
     per_target = dict.fromkeys(sorted(identity), 0)
     swapped_frames = set()
-    for frame, target, track, _ in _pairs(accumulator, gt_rows, hyp_rows):
+    for frame, target, track, _ in _pairs(matching):
         if identity[int(target)] != int(track):
             per_target[int(target)] += 1
             swapped_frames.add(int(frame))
