@@ -27,6 +27,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import re
 import signal
 import sys
 from collections.abc import Iterator
@@ -52,14 +53,21 @@ def _cues(text: str) -> tuple[str, ...]:
 def _integer(minimum: int):
     """An argparse type: an integer of at least ``minimum`` (a bad value is a command-line error)."""
     def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
+        from .limits import clipped
+
+        # Strictly digits (int() also takes "1_0" and other scripts' digits), and below 2^63.
+        if not _INTEGER.fullmatch(text.strip()):
+            raise argparse.ArgumentTypeError(f"must be an integer, got {clipped(repr(text))}")
+        if len(text.strip().lstrip("+-")) > 19 or abs(int(text)) >= 2 ** 63:
+            raise argparse.ArgumentTypeError(f"must be an integer below 2**63, got {clipped(text.strip())}")
+        value = int(text)
         if value < minimum:
             raise argparse.ArgumentTypeError(f"must be an integer >= {minimum}, got {value}")
         return value
     return parse
+
+
+_INTEGER = re.compile(r"[+-]?[0-9]+")
 
 
 def parse_setting(text: str) -> tuple[list[str], Any]:
@@ -425,29 +433,40 @@ def register_eval(subparsers: Any) -> None:
 
 
 # -- belief experiment -----------------------------------------------------------------------------
+#: Runs that ``belief experiment --dry-run`` lists by name (it counts the others).
+DRY_RUN_LISTED = 20
+
+
 def _cmd_experiment(args: argparse.Namespace) -> int:
     from .experiment import load_experiment
-    from .grid import check_output, run_experiment
+    from .grid import check_output, plan_experiment, run_experiment, set_limits
     from .outdir import check_folder, input_paths
     from .tables import format_summary
 
     _output_dir(args.out)
+    set_limits(max_runs=args.max_runs, max_sequences=args.max_sequences, max_methods=args.max_methods,
+               max_run_seconds=args.max_run_seconds, max_run_bytes=args.max_run_bytes)
     experiment = load_experiment(args.config, data_dir=args.data)
     out = check_output(args.out if args.out is not None else Path(args.config).with_suffix(""))
     inputs = [args.config, *(path for sequence in experiment.sequences
                              for path in (sequence.video, sequence.gt, sequence.detections))]
     check_folder(out, input_paths(*inputs), create=False)
     cells = experiment.cells()
+    plan = plan_experiment(experiment, workers=args.workers)
     line = (f"{experiment.name}: {len(experiment.sequences)} sequences x {len(experiment.methods)} methods x "
             f"{len(experiment.seeds)} seeds = {len(cells)} runs; outputs in {out}")
     if args.dry_run:
         print(line)
-        for cell in cells:
+        print(plan.describe())
+        for cell in cells[:DRY_RUN_LISTED]:
             print(f"  {cell.label}")
+        if len(cells) > DRY_RUN_LISTED:
+            print(f"  ... and {len(cells) - DRY_RUN_LISTED:,} more")
         return 0
     # Printed once every argument is checked and the workers are ready: an error is then the only line.
     result = run_experiment(experiment, out, workers=args.workers, scheduler=args.scheduler, fresh=args.fresh,
-                            progress=not args.no_progress, announce=lambda: print(line, flush=True))
+                            progress=not args.no_progress,
+                            announce=lambda: print(f"{line}\n{plan.describe()}", flush=True))
     print(f"ran {result.computed} runs, reused {result.reused} finished ones")
     print(format_summary(result.summary))
     return 0
@@ -483,6 +502,14 @@ def register_experiment(subparsers: Any) -> None:
                         "and sends back pickled results: a scheduler that is not yours can run its own code "
                         "here, so connect only to one you trust")
     p.add_argument("--fresh", action="store_true", help="run every cell again, even the finished ones")
-    p.add_argument("--dry-run", action="store_true", help="list the runs and stop")
+    p.add_argument("--dry-run", action="store_true",
+                   help="print the number of runs, their estimated time and memory and the first runs, and stop")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--max-runs", type=_integer(1), metavar="N", help="most runs of one experiment (default 100000)")
+    p.add_argument("--max-sequences", type=_integer(1), metavar="N", help="most sequences (default 1000)")
+    p.add_argument("--max-methods", type=_integer(1), metavar="N", help="most methods (default 2000)")
+    p.add_argument("--max-run-seconds", type=_integer(1), metavar="N",
+                   help="the longest estimated time of one run, in seconds (default 600)")
+    p.add_argument("--max-run-bytes", type=_integer(1), metavar="N",
+                   help="the largest estimated memory of one run, in bytes (default 1073741824)")
     p.set_defaults(func=_cmd_experiment)

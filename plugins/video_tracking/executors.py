@@ -22,7 +22,7 @@ from typing import Any, TypeVar
 
 from .errors import TrackingError
 
-__all__ = ["outcomes", "executor", "runs_here"]
+__all__ = ["outcomes", "executor", "runs_here", "describe_error", "MAX_ERROR_CHARS"]
 
 Item = TypeVar("Item")
 
@@ -69,7 +69,7 @@ def outcomes(function: Callable[[Item], Any], items: Sequence[Item], *, workers:
             try:
                 yield item, function(item), None
             except Exception as exc:  # noqa: BLE001 - reported with the item it came from
-                yield item, None, f"{type(exc).__name__}: {exc}"
+                yield item, None, describe_error(exc)
         return
     with contextlib.ExitStack() as stack:
         if pool is None:
@@ -80,13 +80,32 @@ def outcomes(function: Callable[[Item], Any], items: Sequence[Item], *, workers:
                 try:
                     result = future.result()
                 except Exception as exc:  # noqa: BLE001 - reported with the item it came from
-                    yield futures[future], None, f"{type(exc).__name__}: {exc}"
+                    yield futures[future], None, describe_error(exc)
                 else:
                     yield futures[future], result, None
         except BaseException:
             for future in futures:
                 future.cancel()
             raise
+
+
+#: The most characters of a failed task's error that its report keeps.
+MAX_ERROR_CHARS = 500
+
+
+def describe_error(exc: BaseException) -> str:
+    """``Type: message`` of a failed task, on one line of at most :data:`MAX_ERROR_CHARS` characters.
+
+    A task's error can be megabytes long or span lines (a traceback of a worker, a whole input
+    quoted); the report of a grid is one line, however its runs failed.
+
+    Examples
+    --------
+    >>> describe_error(ValueError("bad\\nvalue " + "x" * 1000))[:20], len(describe_error(ValueError("x" * 1000)))
+    ('ValueError: bad valu', 500)
+    """
+    text = " ".join(f"{type(exc).__name__}: {exc}".split())
+    return text if len(text) <= MAX_ERROR_CHARS else text[:MAX_ERROR_CHARS - 3] + "..."
 
 
 @contextlib.contextmanager

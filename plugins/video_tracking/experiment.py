@@ -80,6 +80,8 @@ import hashlib
 import json
 import os
 import re
+import stat
+import unicodedata
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
@@ -99,6 +101,12 @@ __all__ = [
     "CELL_FORMAT",
     "AUTOMATIC_WARM_UP",
     "MAX_RUNS",
+    "MAX_SEQUENCES",
+    "MAX_METHODS",
+    "MAX_NAME_CHARS",
+    "MAX_SEED",
+    "MAX_CONFIG_BYTES",
+    "MAX_DEPTH",
     "load_experiment",
     "experiment_from_mapping",
 ]
@@ -117,9 +125,29 @@ _INITS = ("gt", "automatic")
 AUTOMATIC_WARM_UP = 50
 
 #: The most runs (sequences x methods x seeds) an experiment may have.  Each run tracks a whole
-#: sequence, so a larger grid would take years; a count of seeds is refused before any list of
-#: that length is made.  Split a larger study into several experiments.
+#: sequence, so a larger grid would take years; the product is counted from the lengths of the
+#: lists (and of ``[grid]``'s crossing) before any sequence, method or cell is made.  Split a
+#: larger study into several experiments (``belief experiment --max-runs N`` raises it).
 MAX_RUNS = 100_000
+
+#: The most sequences, and methods, of one experiment.  Every method's settings are checked
+#: before any work (about a millisecond each), so these keep the check of a grid within a
+#: second or two.
+MAX_SEQUENCES = 1_000
+MAX_METHODS = 2_000
+
+#: The longest name of an experiment, a sequence or a method, in characters.  Names go into the
+#: file names of the saved runs (cut to a bounded slug there) and into every line of the tables.
+MAX_NAME_CHARS = 200
+
+#: The largest seed (of the tracker or of a scene's rendering): the largest integer of TOML.
+MAX_SEED = 2**63 - 1
+
+#: The largest experiment file, in bytes (a grid of a thousand sequences takes about 60 kB).
+MAX_CONFIG_BYTES = 1 << 20
+
+#: The deepest nesting of tables and arrays in an experiment (``[tracker.motion]`` is 2 deep).
+MAX_DEPTH = 8
 
 
 class ExperimentError(TrackingError):
@@ -168,9 +196,12 @@ class SequenceSpec:
     def __post_init__(self) -> None:
         from . import scenes
 
-        if not isinstance(self.name, str) or not self.name.strip():
-            raise ExperimentError(f"a sequence needs a non-empty name, got {self.name!r}")
+        _check_name(self.name, "a sequence's name")
         where = f"sequence {self.name!r}"
+        for key in ("scene", "video", "gt", "init"):
+            value = getattr(self, key)
+            if value is not None and not isinstance(value, str):
+                raise ExperimentError(f"{where}: {key} must be text, got {type(value).__name__} {value!r:.80}")
         if (self.scene is None) == (self.video is None):
             raise ExperimentError(f"{where}: give either a synthetic 'scene' or a recorded 'video' (with 'gt')")
         if self.scene is not None and self.scene not in scenes.PRESETS:
@@ -180,9 +211,15 @@ class SequenceSpec:
             raise ExperimentError(f"{where}: a recorded video needs its ground truth 'gt' to be scored")
         if self.scene is not None and self.gt is not None:
             raise ExperimentError(f"{where}: a synthetic scene carries its own ground truth; remove 'gt'")
-        _check_count(self.scene_seed, f"{where}: scene_seed", minimum=0)
+        _check_count(self.scene_seed, f"{where}: scene_seed", minimum=0, maximum=MAX_SEED)
         if self.frames is not None:
             _check_count(self.frames, f"{where}: frames", minimum=1)
+            if self.scene is not None:
+                length = scenes.PRESETS[self.scene](self.scene_seed).n_frames
+                if self.frames > length:
+                    # A scene is never longer than its preset: a larger count would be cut silently.
+                    raise ExperimentError(f"{where}: frames = {self.frames} is more than the {length} frames of "
+                                          f"scene {self.scene!r}")
         if self.init not in _INITS:
             raise ExperimentError(f"{where}: init must be one of {', '.join(_INITS)}, got {self.init!r}")
         if self.detections is not None and (not isinstance(self.detections, str) or not self.detections.strip()):
@@ -284,6 +321,9 @@ class MethodSpec:
     name: str
     options: tuple[tuple[str, Any], ...] = ()
 
+    def __post_init__(self) -> None:
+        _check_name(self.name, "a method's name")
+
     @classmethod
     def from_mapping(cls, name: str, options: Mapping[str, Any]) -> MethodSpec:
         """A method from its settings (checked against :class:`TrackerConfig`'s fields)."""
@@ -321,20 +361,11 @@ class Cell:
 
     def settings(self) -> dict[str, Any]:
         """The TrackerConfig keywords of this cell (experiment settings, then the method's)."""
-        settings = _thaw(self.tracker)
-        for name, value in self.method.settings().items():
-            if isinstance(value, dict) and isinstance(settings.get(name), dict):
-                settings[name] = {**settings[name], **value}
-            else:
-                settings[name] = value
-        if self.sequence.init == "automatic":
-            settings.setdefault("initiation", {})
-            settings.setdefault("warm_up", AUTOMATIC_WARM_UP)
-        return settings
+        return _cell_settings(self.tracker, self.method, self.sequence.init == "automatic")
 
     def config(self):
-        """The :class:`~belief_tracking.config.TrackerConfig` of this cell."""
-        return _tracker_config(self.settings(), f"method {self.method.name!r}")
+        """The :class:`~belief_tracking.config.TrackerConfig` of this cell (one frozen object per method)."""
+        return _method_config(self.tracker, self.method, self.sequence.init == "automatic")
 
     @functools.cached_property
     def key(self) -> str:
@@ -342,13 +373,57 @@ class Cell:
 
         The digest covers the complete configuration, defaults included, and the library's
         version, so that a saved run is not reused once a default it ran with has changed.
+        The name is at most about 180 characters, whatever the names of the sequence and the
+        method (each is cut to a slug of 64 characters; the digest tells them apart).
         """
         from belief import __version__
 
-        record = {"format": CELL_FORMAT, "sequence": self.sequence.record(), "settings": self.settings(),
-                  "config": asdict(self.config()), "version": __version__, "seed": self.seed}
-        digest = hashlib.sha256(json.dumps(record, sort_keys=True, default=str).encode()).hexdigest()[:12]
+        # The JSON of the record {format, sequence, settings, config, version, seed} with sorted
+        # keys, assembled from pieces computed once per sequence and per method: the same text
+        # (and so the same key) as json.dumps of the whole record, without building a
+        # TrackerConfig per cell, which made the keys of a large grid take minutes.
+        settings = _settings_json(self.tracker, self.method, self.sequence.init == "automatic")
+        text = (f'{{"config": {_config_json(self.config())}, "format": {CELL_FORMAT}, '
+                f'"seed": {json.dumps(self.seed)}, '
+                f'"sequence": {_sequence_json(self.sequence)}, "settings": {settings}, '
+                f'"version": {json.dumps(__version__)}}}')
+        digest = hashlib.sha256(text.encode()).hexdigest()[:12]
         return f"{_slug(self.sequence.name)}__{_slug(self.method.name)}__seed{self.seed}__{digest}"
+
+
+def _cell_settings(tracker: tuple[tuple[str, Any], ...], method: MethodSpec, automatic: bool) -> dict[str, Any]:
+    """The TrackerConfig keywords of a method's cells: the experiment's settings, then the method's."""
+    settings = _thaw(tracker)
+    for name, value in method.settings().items():
+        if isinstance(value, dict) and isinstance(settings.get(name), dict):
+            settings[name] = {**settings[name], **value}
+        else:
+            settings[name] = value
+    if automatic:
+        settings.setdefault("initiation", {})
+        settings.setdefault("warm_up", AUTOMATIC_WARM_UP)
+    return settings
+
+
+@functools.lru_cache(maxsize=8192)
+def _method_config(tracker: tuple[tuple[str, Any], ...], method: MethodSpec, automatic: bool):
+    """The TrackerConfig of a method's cells, built once for all its sequences and seeds."""
+    return _tracker_config(_cell_settings(tracker, method, automatic), f"method {method.name!r}")
+
+
+@functools.lru_cache(maxsize=8192)
+def _settings_json(tracker: tuple[tuple[str, Any], ...], method: MethodSpec, automatic: bool) -> str:
+    return json.dumps(_cell_settings(tracker, method, automatic), sort_keys=True, default=str)
+
+
+@functools.lru_cache(maxsize=8192)
+def _config_json(config: Any) -> str:
+    return json.dumps(asdict(config), sort_keys=True, default=str)
+
+
+@functools.lru_cache(maxsize=8192)
+def _sequence_json(sequence: SequenceSpec) -> str:
+    return json.dumps(sequence.record(), sort_keys=True, default=str)
 
 
 @dataclass(frozen=True)
@@ -375,24 +450,22 @@ class Experiment:
         for what, items in (("sequences", self.sequences), ("methods", self.methods)):
             if not items:
                 raise ExperimentError(f"the experiment has no {what}")
-            names = [item.name for item in items]
-            repeated = sorted({n for n in names if names.count(n) > 1})
-            if repeated:
-                raise ExperimentError(f"{what} must have distinct names; repeated: {', '.join(repeated)}")
+            _check_length(len(items), what, f"MAX_{what.upper()}", f"--max-{what}")
+            _check_distinct([item.name for item in items], what)
+        _check_name(self.name, "the experiment's name")
         if not self.seeds:
             raise ExperimentError("the experiment has no seeds")
-        runs = len(self.sequences) * len(self.methods) * len(self.seeds)
-        if runs > MAX_RUNS:
-            raise ExperimentError(f"{len(self.sequences)} sequences x {len(self.methods)} methods x "
-                                  f"{len(self.seeds)} seeds = {runs} runs, more than an experiment may have "
-                                  f"(MAX_RUNS = {MAX_RUNS}); split it into several experiments")
+        _check_runs(len(self.sequences), len(self.methods), len(self.seeds))
         for seed in self.seeds:
-            _check_count(seed, "a seed", minimum=0)
+            _check_count(seed, "a seed", minimum=0, maximum=MAX_SEED)
         if len(set(self.seeds)) != len(self.seeds):
-            raise ExperimentError(f"the seeds repeat a value: {list(self.seeds)}")
-        for cell in self.cells():
-            if cell.seed == self.seeds[0]:
-                cell.config()   # every method's settings are checked before any work starts
+            repeated = sorted({s for s in self.seeds if self.seeds.count(s) > 1}) if len(self.seeds) < 1000 else []
+            raise ExperimentError(f"the seeds repeat a value{': ' + str(repeated[:5]) if repeated else ''}")
+        # Every method's settings are checked before any work starts: once per method and kind of
+        # initiation (a cell's settings depend on nothing else), not once per cell.
+        for automatic in sorted({sequence.init == "automatic" for sequence in self.sequences}):
+            for method in self.methods:
+                _method_config(self.tracker, method, automatic)
 
     def cells(self) -> list[Cell]:
         """The cells in grid order: sequence, then method, then seed."""
@@ -430,23 +503,56 @@ def load_experiment(path: str | os.PathLike[str], data_dir: str | os.PathLike[st
     except ModuleNotFoundError:  # pragma: no cover - Python 3.10
         tomllib = require("tomli")
 
+    if not isinstance(path, (str, os.PathLike)) or not os.fspath(path):
+        raise ExperimentError(f"the experiment file must be a non-empty path, got {path!r}")
     path = Path(path)
+    text = _read_config(path)
     try:
-        with open(path, "rb") as handle:
-            mapping = tomllib.load(handle)
-    except FileNotFoundError:
-        raise ExperimentError(f"{path}: no such experiment file") from None
-    except OSError as exc:
-        raise ExperimentError(f"{path}: cannot read ({exc.strerror or exc})") from None
-    except UnicodeDecodeError:
-        raise ExperimentError(f"{path}: not a TOML file (it is not UTF-8 text)") from None
+        mapping = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ExperimentError(f"{path}: not valid TOML ({exc})") from None
-    mapping.setdefault("name", path.stem)
+        raise ExperimentError(f"{_shown_path(str(path))}: not valid TOML ({exc})") from None
+    except RecursionError:
+        raise ExperimentError(f"{_shown_path(str(path))}: not a usable TOML file: its arrays or tables nest deeper than "
+                              f"the parser can follow (an experiment nests at most {MAX_DEPTH} deep)") from None
+    if "name" not in mapping:
+        # The file's stem names the experiment, within the bounds of any name.
+        mapping["name"] = path.stem[:MAX_NAME_CHARS].strip() or "experiment"
     try:
         return experiment_from_mapping(mapping, base_dir=Path(data_dir) if data_dir is not None else path.parent)
     except ExperimentError as exc:
-        raise ExperimentError(f"{path}: {exc}") from None
+        raise ExperimentError(f"{_shown_path(str(path))}: {exc}") from None
+
+
+def _read_config(path: Path) -> str:
+    """The text of an experiment file: a regular file of at most :data:`MAX_CONFIG_BYTES` bytes of UTF-8."""
+    shown = _shown_path(str(path))
+    try:
+        info = path.stat()
+    except FileNotFoundError:
+        raise ExperimentError(f"{shown}: no such experiment file") from None
+    except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
+        raise ExperimentError(f"{shown}: not a usable path ({getattr(exc, 'strerror', None) or exc})") from None
+    if not stat.S_ISREG(info.st_mode):
+        # A FIFO would block and a device (/dev/zero) never ends: only a regular file is read.
+        raise ExperimentError(f"{shown}: not a regular file (an experiment is a TOML file)")
+    if info.st_size > MAX_CONFIG_BYTES:
+        raise ExperimentError(f"{shown}: {info.st_size:,} bytes, more than an experiment file may have "
+                              f"(belief_tracking.experiment.MAX_CONFIG_BYTES = {MAX_CONFIG_BYTES:,}); "
+                              f"split the study into several experiments")
+    try:
+        with open(path, "rb") as handle:
+            data = handle.read(MAX_CONFIG_BYTES + 1)
+    except OSError as exc:
+        raise ExperimentError(f"{shown}: cannot read ({exc.strerror or exc})") from None
+    if len(data) > MAX_CONFIG_BYTES:  # pragma: no cover - the file grew since its stat
+        raise ExperimentError(f"{shown}: more than MAX_CONFIG_BYTES = {MAX_CONFIG_BYTES:,} bytes")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ExperimentError(f"{shown}: not a TOML file (it is not UTF-8 text)") from None
+    if "\0" in text:
+        raise ExperimentError(f"{shown}: not a TOML file (it holds NUL bytes)")
+    return text
 
 
 def experiment_from_mapping(mapping: Mapping[str, Any], base_dir: str | os.PathLike[str] | None = None) -> Experiment:
@@ -467,75 +573,129 @@ def experiment_from_mapping(mapping: Mapping[str, Any], base_dir: str | os.PathL
     """
     if not isinstance(mapping, Mapping):
         raise ExperimentError(f"an experiment is a table of settings, got {type(mapping).__name__}")
+    _check_depth(mapping)
     _check_keys(mapping, _TOP_KEYS, "the experiment")
     base = Path(base_dir) if base_dir is not None else Path.cwd()
     name = mapping.get("name", "experiment")
-    if not isinstance(name, str):
-        raise ExperimentError(f"the experiment's name must be text, got {name!r}")
+    _check_name(name, "the experiment's name")
 
+    # Counted first, from the lengths alone: a grid too large is refused before any sequence,
+    # method or cell is made, in a time that does not grow with its size.
     seeds = mapping.get("seeds", [0])
-    if isinstance(seeds, int) and not isinstance(seeds, bool):
+    if isinstance(seeds, (int, np.integer)) and not isinstance(seeds, bool):
         _check_count(seeds, "seeds (a count)", minimum=1)
         if seeds > MAX_RUNS:
-            raise ExperimentError(f"seeds = {seeds} is more runs than an experiment may have "
-                                  f"(MAX_RUNS = {MAX_RUNS})")
-        seeds = list(range(seeds))
-    if not isinstance(seeds, list):
-        raise ExperimentError(f"seeds must be a list of seeds or a count, got {seeds!r}")
+            raise ExperimentError(f"seeds = {seeds} is more runs than an experiment may have (MAX_RUNS = {MAX_RUNS}); "
+                                  f"split the study into several experiments, or raise the limit with --max-runs N")
+        n_seeds = int(seeds)
+    elif isinstance(seeds, list):
+        if not seeds:
+            raise ExperimentError("seeds is an empty list; give a list of seeds or a count (seeds = 5: 0..4)")
+        n_seeds = len(seeds)
+    else:
+        raise ExperimentError(f"seeds must be a list of seeds or a count, got {type(seeds).__name__} {seeds!r:.80}")
 
     tracker = mapping.get("tracker", {})
     if not isinstance(tracker, Mapping):
-        raise ExperimentError("[tracker] must be a table of TrackerConfig settings")
+        raise ExperimentError(f"[tracker] must be a table of TrackerConfig settings, got "
+                              f"{type(tracker).__name__} {tracker!r:.80}")
     _check_tracker_keys(tracker, "[tracker]")
 
     raw_sequences = mapping.get("sequences")
     if not isinstance(raw_sequences, list) or not raw_sequences:
-        raise ExperimentError("the experiment needs at least one [[sequences]] entry")
-    sequences = tuple(_sequence(entry, base) for entry in raw_sequences)
-
+        got = "" if raw_sequences is None else f", got {type(raw_sequences).__name__} {raw_sequences!r:.80}"
+        raise ExperimentError(f"the experiment needs at least one [[sequences]] entry{got}")
     if "methods" in mapping and "grid" in mapping:
         raise ExperimentError("give either [[methods]] or [grid], not both")
     if "methods" in mapping:
         raw_methods = mapping["methods"]
         if not isinstance(raw_methods, list) or not raw_methods:
             raise ExperimentError("[[methods]] needs at least one entry")
+        n_methods = len(raw_methods)
+    else:
+        grid = mapping.get("grid", {})
+        n_methods = _grid_size(grid)
+    _check_runs(len(raw_sequences), n_methods, n_seeds)
+    _check_length(len(raw_sequences), "sequences", "MAX_SEQUENCES", "--max-sequences")
+    _check_length(n_methods, "methods", "MAX_METHODS", "--max-methods")
+
+    if isinstance(seeds, list):
+        for seed in seeds:
+            _check_count(seed, "a seed", minimum=0, maximum=MAX_SEED)
+    else:
+        seeds = list(range(n_seeds))
+    sequences = tuple(_sequence(entry, base, number) for number, entry in enumerate(raw_sequences, 1))
+    _check_distinct([sequence.name for sequence in sequences], "sequences")
+    if "methods" in mapping:
         methods = []
-        for entry in raw_methods:
-            if not isinstance(entry, Mapping) or not isinstance(entry.get("name"), str):
-                raise ExperimentError(f"every [[methods]] entry needs a name, got {entry!r}")
+        for number, entry in enumerate(raw_methods, 1):
+            if not isinstance(entry, Mapping):
+                raise ExperimentError(f"[[methods]] entry {number} must be a table, got "
+                                      f"{type(entry).__name__} {entry!r:.80}")
+            if "name" not in entry:
+                raise ExperimentError(f"every [[methods]] entry needs a name; entry {number} has none")
+            _check_name(entry["name"], f"[[methods]] entry {number}: name")
             options = {k: v for k, v in entry.items() if k != "name"}
             methods.append(MethodSpec.from_mapping(entry["name"], options))
+        _check_distinct([method.name for method in methods], "methods")
     else:
-        methods = _grid_methods(mapping.get("grid", {}))
+        methods = _grid_methods(grid)
+    _check_tracker_alone(tracker)
     return Experiment(name, sequences, tuple(methods), tuple(seeds), _freeze(tracker))
 
 
-def _sequence(entry: Any, base: Path) -> SequenceSpec:
+#: The type of every key of a ``[[sequences]]`` entry.
+_SEQUENCE_TYPES = {"name": str, "scene": str, "scene_seed": int, "frames": int, "video": str, "gt": str,
+                   "init": str, "detections": str}
+
+
+def _sequence(entry: Any, base: Path, number: int = 1) -> SequenceSpec:
+    where = f"[[sequences]] entry {number}"
     if isinstance(entry, str):
+        _check_name(entry, where)
         entry = {"name": entry, "scene": entry}
     if not isinstance(entry, Mapping):
-        raise ExperimentError(f"a sequence is a scene name or a table, got {entry!r}")
-    _check_keys(entry, _SEQUENCE_KEYS, f"sequence {entry.get('name', '?')!r}")
+        raise ExperimentError(f"{where}: a sequence is a scene name or a table, got "
+                              f"{type(entry).__name__} {entry!r:.80}")
+    _check_keys(entry, _SEQUENCE_KEYS, where)
+    for key, kind in _SEQUENCE_TYPES.items():
+        value = entry.get(key)
+        if value is not None and (not isinstance(value, kind) or isinstance(value, bool)):
+            raise ExperimentError(f"{where}: {key} must be {'an integer' if kind is int else 'text'}, got "
+                                  f"{type(value).__name__} {value!r:.80}")
     values = dict(entry)
     if "name" not in values:
         values["name"] = values.get("scene") or Path(str(values.get("video", "?"))).parent.name or "video"
+    _check_name(values["name"], f"{where}: name")
+    where = f"sequence {values['name']!r}"
     for key in _PATH_KEYS:
         if key in values:
-            if not isinstance(values[key], str):
-                raise ExperimentError(f"sequence {values['name']!r}: {key} must be a path, got {values[key]!r}")
-            resolved = (base / Path(values[key]).expanduser()).resolve()
-            if not resolved.is_file():
-                raise ExperimentError(f"sequence {values['name']!r}: {key} file not found: {resolved}")
-            values[key] = str(resolved)
+            values[key] = _resolve_file(base, values[key], f"{where}: {key}")
+    return SequenceSpec(**values)
+
+
+def _resolve_file(base: Path, text: str, what: str) -> str:
+    """The absolute path of an existing regular file named by ``text`` (relative to ``base``)."""
+    if not text.strip() or "\0" in text:
+        raise ExperimentError(f"{what} must be the path of a file, got {_shown(text)!r}")
+    resolved = base / text
     try:
-        return SequenceSpec(**values)
-    except TypeError as exc:  # pragma: no cover - keys are checked above
-        raise ExperimentError(str(exc)) from None
+        resolved = (base / Path(text).expanduser()).resolve()
+        info = resolved.stat()
+    except FileNotFoundError:
+        raise ExperimentError(f"{what} file not found: {_shown_path(str(resolved))}") from None
+    except (OSError, RuntimeError, ValueError) as exc:  # a name too long, a symlink loop
+        raise ExperimentError(f"{what}: not a usable path {_shown(text)!r} "
+                              f"({getattr(exc, 'strerror', None) or exc})") from None
+    if not stat.S_ISREG(info.st_mode):
+        raise ExperimentError(f"{what}: {_shown_path(str(resolved))} is not a regular file")
+    return str(resolved)
 
 
-def _grid_methods(grid: Any) -> list[MethodSpec]:
+def _grid_lists(grid: Any) -> dict[str, list]:
+    """The lists of ``[grid]``, checked: non-empty lists of text (cue sets: lists of text) without repeats."""
     if not isinstance(grid, Mapping):
-        raise ExperimentError("[grid] must be a table of lists")
+        raise ExperimentError(f"[grid] must be a table of lists, got {type(grid).__name__} {grid!r:.80}")
     _check_keys(grid, _GRID_KEYS, "[grid]")
     lists = {}
     for key in _GRID_KEYS:
@@ -543,11 +703,32 @@ def _grid_methods(grid: Any) -> list[MethodSpec]:
         if value is None:
             continue
         if not isinstance(value, list) or not value:
-            raise ExperimentError(f"[grid] {key} must be a non-empty list, got {value!r}")
+            raise ExperimentError(f"[grid] {key} must be a non-empty list, got {type(value).__name__} {value!r:.80}")
+        if key == "cues":
+            value = [_cue_tuple(item) for item in value]
+        else:
+            for item in value:
+                if not isinstance(item, str):
+                    raise ExperimentError(f"[grid] {key} must be a list of names, got {type(item).__name__} "
+                                          f"{item!r:.80} in it")
+        _check_distinct(value, f"[grid] {key}")
         lists[key] = value
+    return lists
+
+
+def _grid_size(grid: Any) -> int:
+    """How many methods ``[grid]`` crosses, counted without making them."""
+    lists = _grid_lists(grid)
+    fusions = lists.get("fusions", ["belief"])
+    beliefs = fusions.count("belief")
+    return len(lists.get("cues", [None])) * (len(lists.get("rules", [None])) * beliefs + len(fusions) - beliefs)
+
+
+def _grid_methods(grid: Any) -> list[MethodSpec]:
+    lists = _grid_lists(grid)
     rules = lists.get("rules", [None])
     fusions = lists.get("fusions", ["belief"])
-    cue_sets = [None] if "cues" not in lists else [_cue_tuple(c) for c in lists["cues"]]
+    cue_sets = lists.get("cues", [None])
     methods = []
     for cues in cue_sets:
         for fusion in fusions:
@@ -573,13 +754,85 @@ def _cue_tuple(value: Any) -> tuple[str, ...]:
         return tuple(name.strip() for name in value.split(",") if name.strip())
     if isinstance(value, list) and all(isinstance(v, str) for v in value):
         return tuple(value)
-    raise ExperimentError(f"a cue set is a list of cue names or a comma-separated string, got {value!r}")
+    raise ExperimentError(f"a cue set is a list of cue names or a comma-separated string, got {value!r:.80}")
 
 
 def _check_keys(mapping: Mapping[str, Any], known: Sequence[str], where: str) -> None:
     unknown = [key for key in mapping if key not in known]
     if unknown:
-        raise ExperimentError(f"{where}: unknown key {unknown[0]!r}; known keys: {', '.join(known)}")
+        raise ExperimentError(f"{where}: unknown key {_shown(str(unknown[0]))!r}; known keys: {', '.join(known)}")
+
+
+def _check_tracker_alone(tracker: Mapping[str, Any]) -> None:
+    """Refuse a bad ``[tracker]`` setting under its own table's name rather than under a method's."""
+    if tracker:
+        _tracker_config(_thaw(_freeze(tracker)), "[tracker]")
+
+
+def _check_depth(mapping: Mapping[str, Any]) -> None:
+    """Refuse tables and arrays nested deeper than :data:`MAX_DEPTH` (walked without recursion)."""
+    stack: list[tuple[Any, int]] = [(mapping, 1)]
+    while stack:
+        value, depth = stack.pop()
+        if depth > MAX_DEPTH:
+            raise ExperimentError(f"the experiment nests tables or arrays more than "
+                                  f"belief_tracking.experiment.MAX_DEPTH = {MAX_DEPTH} deep (no setting nests "
+                                  f"deeper than 3)")
+        if isinstance(value, Mapping):
+            stack.extend((item, depth + 1) for item in value.values())
+        elif isinstance(value, (list, tuple)):
+            stack.extend((item, depth + 1) for item in value)
+
+
+def _check_runs(sequences: int, methods: int, seeds: int) -> None:
+    runs = sequences * methods * seeds
+    if runs > MAX_RUNS:
+        raise ExperimentError(f"{sequences} sequences x {methods} methods x {seeds} seeds = {runs} runs, more than an "
+                              f"experiment may have (MAX_RUNS = {MAX_RUNS}); split the study into "
+                              f"several experiments, or raise the limit with --max-runs N")
+
+
+def _check_length(count: int, what: str, limit: str, option: str) -> None:
+    maximum = globals()[limit]
+    if count > maximum:
+        raise ExperimentError(f"{count:,} {what}, more than belief_tracking.experiment.{limit} = {maximum:,}; "
+                              f"split the study into several experiments, or raise the limit with {option} N")
+
+
+def _check_distinct(names: Sequence[Any], what: str) -> None:
+    seen: set[Any] = set()
+    repeated = []
+    for name in names:
+        if name in seen and name not in repeated:
+            repeated.append(name)
+        seen.add(name)
+    if repeated:
+        shown = ", ".join(_shown(n if isinstance(n, str) else "+".join(n)) for n in repeated[:5])
+        raise ExperimentError(f"{what} must have distinct names; repeated: {shown}")
+
+
+def _check_name(value: Any, what: str) -> None:
+    """A name of the tables: non-empty text of at most :data:`MAX_NAME_CHARS` characters, no control character."""
+    if not isinstance(value, str) or not value.strip():
+        raise ExperimentError(f"{what} must be non-empty text, got {type(value).__name__} {value!r:.80}")
+    if len(value) > MAX_NAME_CHARS:
+        raise ExperimentError(f"{what} has {len(value):,} characters ({_shown(value, 40)!r}), more than "
+                              f"belief_tracking.experiment.MAX_NAME_CHARS = {MAX_NAME_CHARS}; use a shorter name")
+    bad = next((c for c in value if unicodedata.category(c) in ("Cc", "Cs")), None)
+    if bad is not None:
+        # A NUL, a newline or a lone surrogate breaks the tables' lines and the files' names.
+        raise ExperimentError(f"{what} {_shown(value)!r} holds the control character {bad!r}; "
+                              f"use printable characters only")
+
+
+def _shown(text: str, limit: int = 80) -> str:
+    """``text`` cut for a one-line message."""
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(text):,} characters)"
+
+
+def _shown_path(path: str, limit: int = 240) -> str:
+    """A path cut for a one-line message, keeping its end (the file's name)."""
+    return path if len(path) <= limit else f"{path[:limit // 2]}...{path[-limit // 2:]} ({len(path):,} characters)"
 
 
 def _check_tracker_keys(options: Mapping[str, Any], where: str) -> None:
@@ -589,9 +842,11 @@ def _check_tracker_keys(options: Mapping[str, Any], where: str) -> None:
     _check_keys(options, known, f"{where} (TrackerConfig settings)")
 
 
-def _check_count(value: Any, what: str, minimum: int) -> None:
+def _check_count(value: Any, what: str, minimum: int, maximum: int | None = None) -> None:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise ExperimentError(f"{what} must be an integer >= {minimum}, got {value!r}")
+        raise ExperimentError(f"{what} must be an integer >= {minimum}, got {type(value).__name__} {value!r:.80}")
+    if maximum is not None and value > maximum:
+        raise ExperimentError(f"{what} = {value} is more than the largest allowed, {maximum} (2^63 - 1)")
 
 
 def _freeze(options: Mapping[str, Any]) -> tuple[tuple[str, Any], ...]:
@@ -625,5 +880,15 @@ def _tracker_config(settings: Mapping[str, Any], where: str):
         raise ExperimentError(str(exc)) from None
 
 
+#: The characters of a name that a cell's file name keeps (the key's digest covers the whole name): a file
+#: name has at most 255 bytes.
+_SLUG_LENGTH = 64
+
+
 def _slug(text: str) -> str:
-    return re.sub(r"[^A-Za-z0-9._-]+", "-", text).strip("-") or "x"
+    """A file-name piece of ``text``: ASCII letters, digits, ``.``, ``_`` and ``-``, at most 64 characters.
+
+    A piece never starts with a dot, so that no name hides its file or reads as ``..``.
+    """
+    slug = re.sub(r"[^A-Za-z0-9._-]+", "-", text).strip("-")[:_SLUG_LENGTH].strip("-")
+    return slug if slug and not slug.startswith(".") else f"x{slug}"
