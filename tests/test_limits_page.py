@@ -4,6 +4,8 @@ import importlib
 import re
 from pathlib import Path
 
+import pytest
+
 import belief
 import belief.errors
 
@@ -39,3 +41,29 @@ def test_every_error_class_is_documented():
     assert classes
     for name in classes + ["UnknownRuleError", "MissingPlotExtraError"]:
         assert f"`{name}`" in text or f".{name}`" in text, name
+
+
+TRACKING_ROW = re.compile(r"^\| `(belief_tracking(?:\.\w+)+)\.([A-Z_]+)` \| (\d+) \|", re.MULTILINE)
+#: Constants named MAX_* / MIN_* of the plugin that are parts of its model, not limits on a user's job.
+TRACKING_NOT_LIMITS = {("belief_tracking.perspective", "MAX_SCALE_CHANGE")}
+
+
+def test_every_documented_default_of_the_tracking_plugin_is_the_code_s():
+    pytest.importorskip("cv2")
+    rows = TRACKING_ROW.findall(PAGE.read_text(encoding="utf-8"))
+    assert len(rows) >= 20
+    for module, name, value in rows:
+        assert getattr(importlib.import_module(module), name) == int(value), f"{module}.{name}"
+
+
+def test_every_limit_of_the_tracking_plugin_is_documented():
+    pytest.importorskip("cv2")
+    import belief_tracking
+
+    text = PAGE.read_text(encoding="utf-8")
+    for path in sorted(Path(belief_tracking.__file__).parent.glob("*.py")):
+        module = f"belief_tracking.{path.stem}"
+        for name in re.findall(r"^((?:MAX|MIN)_[A-Z_]+) = ", path.read_text(encoding="utf-8"), re.MULTILINE):
+            if (module, name) in TRACKING_NOT_LIMITS:
+                continue
+            assert f"`{module}.{name}`" in text or f"`{name}`" in text, f"{module}.{name} is not on docs/limits.md"
