@@ -20,13 +20,10 @@ from __future__ import annotations
 
 import concurrent.futures
 import contextlib
-import csv
 import functools
-import io
 import json
 import math
 import os
-import secrets
 import stat
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -44,9 +41,11 @@ from .tables import (
     RESULT_COLUMNS,
     RMS_COLUMNS,
     SUMMARY_METRICS,
+    csv_text,
     rms_per_frame,
     summarise,
     summary_columns,
+    write_text,
 )
 from .writers import ProgressBar
 
@@ -509,54 +508,19 @@ def _write_tables(out: Path, finished: Sequence[Cell], records: Mapping[str, dic
     summary = summarise(results)
     files = {"results.csv": out / "results.csv", "rms.csv": out / "rms.csv", "summary.csv": out / "summary.csv",
              "experiment.json": out / "experiment.json"}
-    _write_atomic(out, "results.csv", _csv_text(RESULT_COLUMNS, results))
-    _write_atomic(out, "rms.csv", _csv_text(RMS_COLUMNS, rms))
-    _write_atomic(out, "summary.csv", _csv_text(summary_columns(), summary))
+    _write_atomic(out, "results.csv", csv_text(RESULT_COLUMNS, results))
+    _write_atomic(out, "rms.csv", csv_text(RMS_COLUMNS, rms))
+    _write_atomic(out, "summary.csv", csv_text(summary_columns(), summary))
     return results, rms, summary, files
 
 
-def _csv_text(columns: Sequence[str], rows: Sequence[Mapping[str, Any]]) -> str:
-    """``rows`` under ``columns`` as CSV text; missing values and NaN as empty cells."""
-    def cell(value: Any) -> str:
-        if value is None:
-            return ""
-        if isinstance(value, float):
-            return "" if not math.isfinite(value) else repr(value)
-        return str(value)
-
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(columns)
-    for row in rows:
-        writer.writerow([cell(row.get(c)) for c in columns])
-    return buffer.getvalue()
-
-
 def _write_atomic(folder: Path, name: str, text: str) -> Path:
-    """Write ``folder/name`` whole: to a new hidden name in ``folder``, then renamed over ``name``.
-
-    The temporary name is created with ``O_EXCL | O_NOFOLLOW``, so never through an existing
-    file or symlink; :func:`os.replace` replaces a symlink at ``name`` instead of following it.
-    """
+    """Write ``folder/name`` whole, never through a symbolic link (:func:`~belief_tracking.tables.write_text`)."""
     target = folder / name
-    partial = folder / f".{name}.{secrets.token_hex(4)}.partial"
-    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
     try:
-        descriptor = os.open(partial, flags, 0o644)
+        write_text(target, text)
     except OSError as exc:
         raise ExperimentError(f"cannot write {target} ({exc.strerror or exc})") from None
-    try:
-        with open(descriptor, "w", encoding="utf-8", newline="") as handle:
-            handle.write(text)
-        os.replace(partial, target)
-    except OSError as exc:
-        with contextlib.suppress(OSError):
-            os.unlink(partial)
-        raise ExperimentError(f"cannot write {target} ({exc.strerror or exc})") from None
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(partial)
-        raise
     return target
 
 

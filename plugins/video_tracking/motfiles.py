@@ -13,15 +13,14 @@ Every value is checked to lie in a sane range (:data:`MAX_FRAME`, :data:`MAX_ID`
 from __future__ import annotations
 
 import math
-import os
 import re
-import stat
 from collections.abc import Callable, Iterator, Sequence
 from os import PathLike
 
 import numpy as np
 
 from .errors import TrackFileError
+from .limits import regular_file
 
 __all__ = ["MOT_COLUMNS", "MAX_FRAME", "MAX_ID", "MAX_COORDINATE", "MIN_BOX_SIZE", "MAX_TEXT_BYTES", "read_mot",
            "write_tracks", "text_lines", "check_frame", "check_box", "check_ground_truth", "parse_number",
@@ -123,16 +122,7 @@ def read_table_text(path: str | PathLike[str], what: str, error: type[Exception]
     belief_tracking.errors.TrackFileError: cannot read track file 'no-such-file.txt': no such file
     """
     name = str(path)
-    try:
-        status = os.stat(path)
-    except FileNotFoundError:
-        raise error(f"cannot read {what} {name!r}: no such file") from None
-    except (OSError, ValueError) as exc:
-        raise error(f"cannot read {what} {name!r}: {getattr(exc, 'strerror', None) or exc}") from None
-    if stat.S_ISDIR(status.st_mode):
-        raise error(f"cannot read {what} {name!r}: it is a directory")
-    if not stat.S_ISREG(status.st_mode):
-        raise error(f"cannot read {what} {name!r}: it is not a regular file ({_kind(status.st_mode)})")
+    status = regular_file(path, what, error)
     if status.st_size > MAX_TEXT_BYTES:
         raise error(_too_large(what, name, f"{status.st_size:,} bytes"))
     try:
@@ -146,14 +136,6 @@ def read_table_text(path: str | PathLike[str], what: str, error: type[Exception]
         return data.decode("utf-8-sig")
     except UnicodeDecodeError:
         raise error(f"cannot read {what} {name!r}: not UTF-8 text") from None
-
-
-def _kind(mode: int) -> str:
-    for test, kind in ((stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
-                       (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
-        if test(mode):
-            return kind
-    return "not a file"
 
 
 def _too_large(what: str, name: str, size: str) -> str:

@@ -24,9 +24,12 @@ never leaves half a table.
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import io
 import math
 import os
+import secrets
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -151,26 +154,43 @@ def format_summary(rows: Sequence[Mapping[str, Any]]) -> str:
 
 
 def write_text(path: Path, text: str) -> None:
-    """Write through a temporary file, so that an interruption never leaves half a file."""
-    partial = path.with_name(f".{path.name}.partial")
-    partial.write_text(text, encoding="utf-8")
-    os.replace(partial, path)
+    """Write ``path`` whole: to a new hidden name in its folder, then renamed over ``path``.
+
+    An interruption never leaves half a file.  The temporary name is created with ``O_EXCL`` and
+    ``O_NOFOLLOW``, so never through an existing file or symbolic link, and :func:`os.replace`
+    replaces a link at ``path`` instead of following it.  OSError is left to the caller, which
+    knows what the file is.
+    """
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    partial = path.with_name(f".{path.name}.{secrets.token_hex(4)}.partial")
+    descriptor = os.open(partial, flags, 0o644)
+    try:
+        with open(descriptor, "w", encoding="utf-8", newline="") as handle:
+            handle.write(text)
+        os.replace(partial, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(partial)
+        raise
 
 
-def _cell_text(value: Any) -> str:
-    if value is None:
-        return ""
-    if isinstance(value, float):
-        return "" if not math.isfinite(value) else repr(value)
-    return str(value)
+def csv_text(columns: Sequence[str], rows: Sequence[Mapping[str, Any]]) -> str:
+    """``rows`` under ``columns`` as CSV text; missing values and NaN as empty cells."""
+    def cell(value: Any) -> str:
+        if value is None:
+            return ""
+        if isinstance(value, float):
+            return "" if not math.isfinite(value) else repr(value)
+        return str(value)
+
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(columns)
+    for row in rows:
+        writer.writerow([cell(row.get(c)) for c in columns])
+    return buffer.getvalue()
 
 
 def write_csv(path: Path, columns: Sequence[str], rows: Sequence[Mapping[str, Any]]) -> None:
-    """Write ``rows`` under ``columns`` (missing values and NaN as empty cells), through a temporary file."""
-    partial = path.with_name(f".{path.name}.partial")
-    with open(partial, "w", encoding="utf-8", newline="") as handle:
-        writer = csv.writer(handle, lineterminator="\n")
-        writer.writerow(columns)
-        for row in rows:
-            writer.writerow([_cell_text(row.get(c)) for c in columns])
-    os.replace(partial, path)
+    """Write ``rows`` under ``columns`` (:func:`csv_text`) as :func:`write_text` does."""
+    write_text(path, csv_text(columns, rows))
