@@ -608,7 +608,11 @@ def test_paper_r_near_one_keeps_the_relative_precision_of_one_minus_r(columns, d
             # Below the normal range (2^-1022) a float keeps fewer digits: one rounding of 2^-1075 there.
             assert rho[0] == pytest.approx(float(1 - root(1 - exact_overlap)), rel=1e-13, abs=2.0 ** -1073)
         else:
-            assert r[0] == pytest.approx(float(root(exact_half)), rel=1e-13, abs=0)
+            # The half Σ|Δ|/2 handed to it is a float: below 2^-1022 its rounding errs by up to 2^-1075
+            # absolutely, which moves √ by that over 2R (R ≈ 1e-156 for a half of 5e-312); a bound of
+            # twice that leaves room for the rounding of √ itself.
+            want = float(root(exact_half))
+            assert r[0] == pytest.approx(want, rel=1e-13, abs=2.0 ** -1074 / (2 * want) if want else 0.0)
             assert r[0] + rho[0] == 1.0
 
 
