@@ -3,12 +3,18 @@
 from __future__ import annotations
 
 import json
+import os
+import stat
 from pathlib import Path
 from typing import Any, Union
 
 from belief.errors import BeliefError, FormatError
 
-__all__ = ["read_text", "load_json", "MAX_INTEGER_DIGITS"]
+__all__ = ["read_text", "load_json", "MAX_INTEGER_DIGITS", "MAX_TEXT_BYTES"]
+
+#: Bytes of a text file read whole (a BBA, model or settings file): a mass function of a million
+#: focal elements is about 30 MB of JSON.  Checked before the file is read.
+MAX_TEXT_BYTES = 256 * 2**20
 
 #: JSON integers longer than this are refused: no mass, rate or probability needs one, and a
 #: float cannot hold an integer of more than 309 digits anyway.
@@ -25,6 +31,22 @@ def read_text(path: Union[str, Path], what: str, error: type[BeliefError] = Form
     belief.errors.FormatError: cannot read BBA file 'no-such-file.json': no such file
     """
     name = str(path)
+    try:
+        info = os.stat(path)
+    except ValueError:                          # a NUL in the name
+        raise error(f"cannot read {what} {name[:200]!r}: not a valid file name") from None
+    except OSError:
+        info = None                             # read_text says what is wrong
+    if info is not None:
+        # A FIFO would block the reader and a device (/dev/zero) never ends: only a regular file is read,
+        # and only one of a size that fits.
+        if stat.S_ISREG(info.st_mode) and info.st_size > MAX_TEXT_BYTES:
+            raise error(f"cannot read {what} {name!r}: it holds {info.st_size:,} bytes, more than "
+                        f"belief.textfiles.MAX_TEXT_BYTES = {MAX_TEXT_BYTES:,}")
+        if not stat.S_ISREG(info.st_mode) and not stat.S_ISDIR(info.st_mode):
+            kind = "a FIFO" if stat.S_ISFIFO(info.st_mode) else "a socket" if stat.S_ISSOCK(info.st_mode) \
+                else "a device"
+            raise error(f"cannot read {what} {name!r}: it is {kind}, not a regular file")
     try:
         return Path(path).read_text(encoding=encoding)
     except FileNotFoundError:

@@ -1,6 +1,7 @@
 """Hostile or degenerate input ends with one specific error, never a traceback, a hang or a wrong answer."""
 
 import json
+import os
 import math
 import random
 
@@ -23,6 +24,7 @@ from belief.batch import _largest_epsilon
 from belief.cli import main
 from belief.frame import MAX_PROPOSITION_TERMS, reduce_terms, term_key
 from belief.model import MAX_LISTED_CONSTRAINTS
+from belief import textfiles
 from belief.textfiles import load_json
 
 
@@ -378,3 +380,22 @@ def test_batch_betp_and_dsmp_refuse_cardinalities_beyond_floats():
     with pytest.raises(UndefinedTransformError, match=r"use ε ≤ 8\.98\d*e\+307"):
         small.dsmp(["a"], 1e308)
     assert small.dsmp(["a"], 1e300)[0, 0] == pytest.approx(0.25)
+
+
+# -- files that are not regular, or too large (a FIFO blocked the reader; /dev/zero filled the memory) ----------
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs")
+def test_a_fifo_as_a_bba_file_is_refused_without_blocking(capsys, tmp_path):
+    fifo = tmp_path / "m.json"
+    os.mkfifo(fifo)
+    refused(capsys, "combine", "--rule", "dempster", str(fifo), str(fifo), says=("it is a FIFO, not a regular file",))
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/zero"), reason="no /dev/zero")
+def test_a_device_as_a_bba_file_is_refused_before_it_is_read(capsys):
+    refused(capsys, "decide", "/dev/zero", says=("'/dev/zero': it is a device, not a regular file",))
+
+
+def test_a_bba_file_over_the_size_limit_is_refused_before_it_is_read(capsys, write, monkeypatch):
+    path = write("m.json", {"frame": ["a", "b"], "mass": {"a": 0.5, "b": 0.5}})
+    monkeypatch.setattr(textfiles, "MAX_TEXT_BYTES", 10)
+    refused(capsys, "decide", path, says=("more than belief.textfiles.MAX_TEXT_BYTES = 10",))
