@@ -162,7 +162,8 @@ class OutputFolder:
 
     def _check_contents(self) -> dict[str, dict]:
         """The earlier run's files by name; refuse a folder in the way, or foreign files unless ``force``."""
-        manifest = _read_manifest(self.out_dir / MANIFEST)
+        listed = _read_manifest(self.out_dir / MANIFEST)
+        manifest = listed or {}
         earlier: dict[str, dict] = {}
         foreign: list[str] = []
         try:
@@ -173,8 +174,12 @@ class OutputFolder:
             name = entry.name
             if (name in self.names or name == MANIFEST) and entry.is_dir(follow_symlinks=False):
                 raise self._refuse(f"{name} is a folder, where the run writes its file {name}; move it away")
-            if name == MANIFEST or (_PARTIAL.fullmatch(name) and entry.is_file(follow_symlinks=False)):
+            if (name == MANIFEST and listed is not None) or (_PARTIAL.fullmatch(name)
+                                                             and entry.is_file(follow_symlinks=False)):
                 continue  # the list itself, and what a run killed outright left staged
+            if name == MANIFEST:                # a file of that name that is no list of a run's: the user's
+                foreign.append(name)
+                continue
             record = _matching(entry, manifest.get(name, ()))
             if record is not None:
                 earlier[name] = record
@@ -366,24 +371,28 @@ def _reason(exc: OSError) -> str:
     return exc.strerror or str(exc)
 
 
-def _read_manifest(path: Path) -> dict[str, list[dict]]:
-    """The manifest's records by name; an unreadable, oversized or malformed one (or a symlink) lists nothing."""
+def _read_manifest(path: Path) -> dict[str, list[dict]] | None:
+    """The manifest's records by name; None where there is none, or what is there is not one of a run's.
+
+    An unreadable, oversized or malformed file, a symlink, a FIFO or a folder at that name is
+    not a run's list: it is the user's, and :meth:`OutputFolder._check_contents` keeps it.
+    """
     try:
         # Non-blocking: a FIFO put there must not hang the gate; then only a regular file is read.
         handle = os.open(path, os.O_RDONLY | _NO_FOLLOW | getattr(os, "O_NONBLOCK", 0))
     except OSError:
-        return {}
+        return None
     try:
         if not stat.S_ISREG(os.fstat(handle).st_mode):
             os.close(handle)
-            return {}
+            return None
         with os.fdopen(handle, "rb") as stream:
             text = stream.read(_MAX_MANIFEST_BYTES + 1)
         data = json.loads(text) if len(text) <= _MAX_MANIFEST_BYTES else None
     except (OSError, ValueError):
-        return {}
+        return None
     if not isinstance(data, dict) or data.get("format") != MANIFEST_FORMAT or not isinstance(data.get("files"), dict):
-        return {}
+        return None
     return {name: [r for r in records if _valid_record(r)]
             for name, records in data["files"].items() if isinstance(records, list)}
 

@@ -310,3 +310,25 @@ def test_an_experiment_whose_out_holds_its_settings_file_is_refused(tmp_path, ca
     status, _, err = belief(capsys, "experiment", grid, "--out", tmp_path, "--workers", "1", "--no-progress")
     assert "grid.toml" in refused(status, err)
     assert snapshot(tmp_path) == before
+
+
+def test_a_file_of_the_manifest_s_name_that_no_run_wrote_is_the_user_s(tmp_path, capsys, video, quick_plot):
+    source, boxes = video
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / ".belief-outputs.json").write_text("my notes\n")
+    before = snapshot(tmp_path)
+    status, _, err = belief(capsys, "track", source, "--init", boxes, "--out", out, *QUICK)
+    assert ".belief-outputs.json" in refused(status, err)
+    assert snapshot(tmp_path) == before
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs")
+def test_a_fifo_of_the_manifest_s_name_is_refused_without_blocking(tmp_path, capsys, video, quick_plot):
+    source, boxes = video
+    out = tmp_path / "out"
+    out.mkdir()
+    os.mkfifo(out / ".belief-outputs.json")
+    status, _, err = belief(capsys, "track", source, "--init", boxes, "--out", out, *QUICK)
+    assert ".belief-outputs.json" in refused(status, err)
+    assert (out / ".belief-outputs.json").is_fifo()
