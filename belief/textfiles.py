@@ -10,7 +10,7 @@ from typing import Any, Union
 
 from belief.errors import BeliefError, FormatError
 
-__all__ = ["read_text", "load_json", "MAX_INTEGER_DIGITS", "MAX_TEXT_BYTES"]
+__all__ = ["read_text", "regular_file", "load_json", "MAX_INTEGER_DIGITS", "MAX_TEXT_BYTES"]
 
 #: Bytes of a text file read whole (a BBA, model or settings file): a mass function of a million
 #: focal elements is about 30 MB of JSON.  Checked before the file is read.
@@ -31,22 +31,10 @@ def read_text(path: Union[str, Path], what: str, error: type[BeliefError] = Form
     belief.errors.FormatError: cannot read BBA file 'no-such-file.json': no such file
     """
     name = str(path)
-    try:
-        info = os.stat(path)
-    except ValueError:                          # a NUL in the name
-        raise error(f"cannot read {what} {name[:200]!r}: not a valid file name") from None
-    except OSError:
-        info = None                             # read_text says what is wrong
-    if info is not None:
-        # A FIFO would block the reader and a device (/dev/zero) never ends: only a regular file is read,
-        # and only one of a size that fits.
-        if stat.S_ISREG(info.st_mode) and info.st_size > MAX_TEXT_BYTES:
-            raise error(f"cannot read {what} {name!r}: it holds {info.st_size:,} bytes, more than "
-                        f"belief.textfiles.MAX_TEXT_BYTES = {MAX_TEXT_BYTES:,}")
-        if not stat.S_ISREG(info.st_mode) and not stat.S_ISDIR(info.st_mode):
-            kind = "a FIFO" if stat.S_ISFIFO(info.st_mode) else "a socket" if stat.S_ISSOCK(info.st_mode) \
-                else "a device"
-            raise error(f"cannot read {what} {name!r}: it is {kind}, not a regular file")
+    info = regular_file(path, what, error)
+    if info.st_size > MAX_TEXT_BYTES:
+        raise error(f"cannot read {what} {_path_text(name)}: it holds {info.st_size:,} bytes, more than "
+                    f"belief.textfiles.MAX_TEXT_BYTES = {MAX_TEXT_BYTES:,}")
     try:
         return Path(path).read_text(encoding=encoding)
     except FileNotFoundError:
@@ -57,6 +45,46 @@ def read_text(path: Union[str, Path], what: str, error: type[BeliefError] = Form
         raise error(f"cannot read {what} {name!r}: not {encoding.upper().replace('-SIG', '')} text") from None
     except OSError as exc:
         raise error(f"cannot read {what} {name!r}: {exc.strerror or exc}") from None
+
+
+def regular_file(path: Union[str, Path], what: str, error: type[BeliefError] = FormatError) -> os.stat_result:
+    """The ``stat`` of ``path`` if it is a regular file (a symbolic link to one is), else ``error`` naming ``what``.
+
+    A FIFO would block the reader and a device (``/dev/zero``) never ends, so neither is opened.
+
+    >>> regular_file("/dev/null", "BBA file")
+    Traceback (most recent call last):
+    ...
+    belief.errors.FormatError: cannot read BBA file '/dev/null': it is a device, not a regular file
+    """
+    name = _path_text(os.fspath(path))
+    try:
+        info = os.stat(path)
+    except FileNotFoundError:
+        raise error(f"cannot read {what} {name}: no such file") from None
+    except ValueError:                          # a NUL in the name
+        raise error(f"cannot read {what} {name}: not a valid file name") from None
+    except OSError as exc:
+        raise error(f"cannot read {what} {name}: {exc.strerror or exc}") from None
+    if stat.S_ISDIR(info.st_mode):
+        raise error(f"cannot read {what} {name}: it is a directory")
+    if not stat.S_ISREG(info.st_mode):
+        kind = ("a FIFO" if stat.S_ISFIFO(info.st_mode) else "a socket" if stat.S_ISSOCK(info.st_mode)
+                else "a device" if stat.S_ISCHR(info.st_mode) or stat.S_ISBLK(info.st_mode) else "not a file")
+        raise error(f"cannot read {what} {name}: it is {kind}, not a regular file")
+    return info
+
+
+#: Characters of a file name quoted in a message (a name of 100 000 characters would make a line of that size).
+_SHOWN_NAME = 240
+
+
+def _path_text(name: str) -> str:
+    """A file name for a message: quoted, cut in the middle beyond :data:`_SHOWN_NAME` characters."""
+    if len(name) <= _SHOWN_NAME:
+        return repr(name)
+    half = _SHOWN_NAME // 2
+    return f"{name[:half]!r}...{name[-half:]!r} ({len(name):,} characters)"
 
 
 def load_json(text: Union[str, bytes], where: str = "") -> Any:

@@ -43,7 +43,6 @@ import contextlib
 import math
 import os
 import reprlib
-import stat
 import struct
 import sys
 from collections.abc import Iterator, Mapping
@@ -52,6 +51,7 @@ from pathlib import Path
 from typing import Any
 
 from belief.errors import BeliefError, ResourceLimitError
+from belief.textfiles import regular_file
 
 from .errors import TrackingError
 
@@ -359,27 +359,6 @@ def check_run(config, source, init=None) -> MemoryEstimate:
 
 
 # -- files -----------------------------------------------------------------------------------------
-def regular_file(path: str | os.PathLike[str], what: str, error: type[BeliefError] = TrackingError) -> os.stat_result:
-    """The ``stat`` of ``path`` if it is a regular file (a symbolic link to one is), else ``error``.
-
-    A FIFO would block the reader and a device (``/dev/zero``) never ends, so neither is opened.
-    """
-    name = shown(os.fspath(path))
-    try:
-        info = os.stat(path)
-    except FileNotFoundError:
-        raise error(f"cannot read {what} {name}: no such file") from None
-    except (OSError, ValueError) as exc:
-        raise error(f"cannot read {what} {name}: {getattr(exc, 'strerror', None) or exc}") from None
-    if stat.S_ISDIR(info.st_mode):
-        raise error(f"cannot read {what} {name}: it is a directory")
-    if not stat.S_ISREG(info.st_mode):
-        kind = "a FIFO" if stat.S_ISFIFO(info.st_mode) else "a device" if stat.S_ISCHR(info.st_mode) or \
-            stat.S_ISBLK(info.st_mode) else "a socket" if stat.S_ISSOCK(info.st_mode) else "not a regular file"
-        raise error(f"cannot read {what} {name}: it is {kind}, not a regular file")
-    return info
-
-
 def read_small_text(path: str | os.PathLike[str], what: str, error: type[BeliefError] = TrackingError,
                     encoding: str = "utf-8") -> str:
     """The text of a regular file of at most :data:`MAX_TEXT_BYTES` bytes, else ``error``."""
