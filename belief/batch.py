@@ -18,16 +18,23 @@ from typing import ClassVar, Union
 
 import numpy as np
 
-from belief.errors import FrameError, InvalidMassError, UndefinedTransformError
+from belief.errors import FrameError, InvalidMassError, ResourceLimitError, UndefinedTransformError
 from belief.frame import Element, Frame
 from belief.model import Model, _show
 from belief.incidence import SPARSE_TABLE_ENTRIES, Incidence, incidence, without_empty
 from belief.plan import weighted_sum
+from belief.relation_tables import CodedRelations, coded_relations
 
 __all__ = ["MassBatch", "measure_plan", "MeasurePlan", "SUM_TOLERANCE", "resolve_model", "check_select"]
 
 #: Masses must sum to one within this absolute tolerance.
 SUM_TOLERANCE = 1e-9
+#: Entries of a dense table relating focal elements to queries (8 bytes each, up to five tables a plan).
+MAX_TABLE_ENTRIES = 10_000_000
+#: Entries of such a table computed element by element, where the model has too many Venn regions to code them.
+MAX_ELEMENT_ENTRIES = 200_000
+
+_module = sys.modules[__name__]
 
 Query = Union[Element, str]
 
@@ -88,33 +95,46 @@ class MeasurePlan:
             return sparse.weigh(values, relation)
         return weighted_sum(values, getattr(self, relation))
 
-    def _table(self, relation) -> np.ndarray:
-        table = np.array(
-            [[relation(x, a) for a in self.queries] for x in self.focal], dtype=np.float64
-        ).reshape(len(self.focal), len(self.queries))
+    @cached_property
+    def _coded(self) -> CodedRelations | None:
+        return coded_relations(self.model, self.focal, self.queries)
+
+    def _table(self, name: str, relation) -> np.ndarray:
+        """The (K, Q) table of ``name``: from the elements' codes where they have them, else ``relation`` pair by pair."""
+        k, q = len(self.focal), len(self.queries)
+        _check_entries(k * q, f"a table of {k:,} focal elements by {q:,} queries")
+        coded = self._coded if k * q else None
+        if coded is not None and (name != "meet_cardinality" or coded.weights is not None):
+            table = coded.table(name)
+        else:
+            _check_entries(k * q, f"a table of {k:,} focal elements by {q:,} queries compared element by element "
+                           "(the model has too many Venn regions to code them)", one_by_one=True)
+            table = np.array(
+                [[relation(x, a) for a in self.queries] for x in self.focal], dtype=np.float64
+            ).reshape(k, q)
         table.flags.writeable = False
         return table
 
     @cached_property
     def subset(self) -> np.ndarray:
         """1 where ∅ ≠ X ⊆ A (belief, W (8))."""
-        return self._table(lambda x, a: bool(x.terms) and x <= a)
+        return self._table("subset", lambda x, a: bool(x.terms) and x <= a)
 
     @cached_property
     def meets(self) -> np.ndarray:
         """1 where X ∩ A ≠ ∅ under the model (plausibility, W (9))."""
         model = self.model
-        return self._table(lambda x, a: not model.is_empty(x & a))
+        return self._table("meets", lambda x, a: not model.is_empty(x & a))
 
     @cached_property
     def superset(self) -> np.ndarray:
         """1 where A ⊆ X (commonality)."""
-        return self._table(lambda x, a: a <= x)
+        return self._table("superset", lambda x, a: a <= x)
 
     @cached_property
     def equal(self) -> np.ndarray:
         """1 where X = A under the model (the mass of A); an empty query matches the ∅ column."""
-        return self._table(lambda x, a: x == a)
+        return self._table("equal", lambda x, a: x == a)
 
     @cached_property
     def focal_cardinality(self) -> np.ndarray:
@@ -125,7 +145,7 @@ class MeasurePlan:
     def meet_cardinality(self) -> np.ndarray:
         """C_M(X ∩ A), shape (K, Q)."""
         model = self.model
-        return self._table(lambda x, a: float(model.cardinality(x & a)))
+        return self._table("meet_cardinality", lambda x, a: float(model.cardinality(x & a)))
 
     @cached_property
     def ratio(self) -> np.ndarray:
@@ -146,6 +166,10 @@ class MeasurePlan:
         """[C(Z) = 1 and Z ⊆ X ∩ A], shape (K_Z, K_X, Q)."""
         model = self.model
         focal, queries = self.focal, self.queries
+        units = int(self.unit.sum())
+        what = f"the DSmP table of {len(focal):,} focal elements by {len(queries):,} queries"
+        _check_entries(len(focal) ** 2 * len(queries), what)
+        _check_entries(units * len(focal) * len(queries), what + " compared element by element", one_by_one=True)
         table = np.zeros((len(focal), len(focal), len(queries)))
         for z, zel in enumerate(focal):
             if not self.unit[z]:
@@ -159,9 +183,20 @@ class MeasurePlan:
     def unit_in_focal(self) -> np.ndarray:
         """[C(Z) = 1 and Z ⊆ X], shape (K_Z, K_X)."""
         focal = self.focal
+        _check_entries(len(focal) ** 2, f"the DSmP table of {len(focal):,} focal elements by themselves")
         return np.array(
             [[float(self.unit[z] and zel <= xel) for xel in focal] for z, zel in enumerate(focal)]
         ).reshape(len(focal), len(focal))
+
+
+def _check_entries(entries: int, what: str, one_by_one: bool = False) -> None:
+    """Refuse a table of more entries than :data:`MAX_TABLE_ENTRIES` (:data:`MAX_ELEMENT_ENTRIES` ``one_by_one``)."""
+    name = "MAX_ELEMENT_ENTRIES" if one_by_one else "MAX_TABLE_ENTRIES"
+    limit = getattr(_module, name)
+    if entries > limit:
+        raise ResourceLimitError(
+            f"{what} holds {entries:,} entries, more than belief.batch.{name} = {limit:,}; ask for fewer "
+            f"queries or raise belief.batch.{name}", f"belief.batch.{name}")
 
 
 @lru_cache(maxsize=256)

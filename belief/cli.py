@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from importlib.metadata import entry_points
 from typing import Any
 
-from belief.errors import BeliefError, CombinationTooLargeError, FormatError
+from belief.errors import BeliefError, CombinationTooLargeError, FormatError, ResourceLimitError
 from belief.frame import Frame
 from belief.lattice import check_lattice_size, hyper_power_set
 from belief.mass import MassFunction, check_cardinality_range
@@ -273,6 +273,27 @@ LIMIT_FLAGS = {"max-tuples": "belief.plan.MAX_TUPLES", "max-work": "belief.plan.
                "max-plus-tuples": "belief.extra_rules.MAX_PLUS_TUPLES"}
 
 
+#: The options of the commands that measure a mass function (``measures``, ``transform``, ``decide``, ``distance``,
+#: ``uncertainty``) that raise a limit of the tables relating its focal elements to the queries.
+TABLE_LIMIT_FLAGS = {"max-table-entries": "belief.batch.MAX_TABLE_ENTRIES",
+                     "max-element-entries": "belief.batch.MAX_ELEMENT_ENTRIES"}
+
+
+def _run_measuring(args: argparse.Namespace) -> int:
+    """Run a measuring command with the table limits its options set; a refusal names the option."""
+    given = {name: getattr(args, flag.replace("-", "_")) for flag, name in TABLE_LIMIT_FLAGS.items()}
+    try:
+        with _limits({name: value for name, value in given.items() if value is not None}):
+            return args.measuring(args)
+    except ResourceLimitError as exc:
+        flag = next((f for f, name in TABLE_LIMIT_FLAGS.items() if name == exc.limit), None)
+        if flag is None:
+            raise
+        hint = "ask for fewer queries (--query PROP ...) or" if args.measuring is _cmd_measures else "or"
+        message = str(exc).replace(f"ask for fewer queries or raise {exc.limit}", f"{hint} raise it with --{flag} N")
+        raise ResourceLimitError(message, exc.limit) from None
+
+
 def _limit_value(text: str) -> int:
     """A limit given on the command line: a positive whole number, as ``4000000``, ``4_000_000`` or ``4e6``."""
     try:
@@ -444,6 +465,12 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 # -- parser ---------------------------------------------------------------------------------------------
+def _table_limit_options(parser: argparse.ArgumentParser) -> None:
+    for flag, name in TABLE_LIMIT_FLAGS.items():
+        parser.add_argument(f"--{flag}", type=_limit_value, metavar="N",
+                            help=f"raise (or lower) {name} (see the docs' Limits and errors page)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser, with the plugins' subcommands registered."""
     parser = _Parser(prog="belief", description="Evidence fusion with belief functions (DST and DSmT).")
@@ -467,7 +494,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--query", nargs="+", action="extend", metavar="PROP",
                    help="propositions (default: every focal element); --query A B and --query A --query B alike")
     p.add_argument("--json", action="store_true", help="print JSON")
-    p.set_defaults(func=_cmd_measures)
+    _table_limit_options(p)
+    p.set_defaults(func=_run_measuring, measuring=_cmd_measures)
 
     p = sub.add_parser("transform", help="pignistic/DSmP/plausibility probabilities, discounting, conditioning",
                        description="Probabilistic transformations and operations on one mass function.")
@@ -485,7 +513,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--query", nargs="+", action="extend", metavar="PROP",
                    help="extra propositions for --pignistic/--dsmp")
     p.add_argument("--json", action="store_true", help="print JSON")
-    p.set_defaults(func=_cmd_transform)
+    _table_limit_options(p)
+    p.set_defaults(func=_run_measuring, measuring=_cmd_transform)
 
     p = sub.add_parser("combine", help="combine BBA files with a rule",
                        description="Combine two or more mass functions with a combination rule.")
@@ -515,7 +544,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tolerance", type=float, default=1e-9, metavar="TOL",
                    help="values within TOL of the largest are tied (default 1e-9)")
     p.add_argument("--json", action="store_true", help='print {"decision": [...], "value": x}')
-    p.set_defaults(func=_cmd_decide)
+    _table_limit_options(p)
+    p.set_defaults(func=_run_measuring, measuring=_cmd_decide)
 
     from belief.distances import DISTANCES
 
@@ -526,7 +556,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--kind", choices=list(DISTANCES), default="jousselme",
                    help="which distance (default jousselme)")
     p.add_argument("--json", action="store_true", help='print {"distance": x}')
-    p.set_defaults(func=_cmd_distance)
+    _table_limit_options(p)
+    p.set_defaults(func=_run_measuring, measuring=_cmd_distance)
 
     p = sub.add_parser("uncertainty", help="nonspecificity, Deng's entropy and other uncertainty measures",
                        description="Uncertainty measures of one mass function, in bits: every measure "
@@ -535,7 +566,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--measure", nargs="+", action="extend", metavar="NAME",
                    help="only these measures (default: every measure defined under the model)")
     p.add_argument("--json", action="store_true", help="print JSON")
-    p.set_defaults(func=_cmd_uncertainty)
+    _table_limit_options(p)
+    p.set_defaults(func=_run_measuring, measuring=_cmd_uncertainty)
 
     p = sub.add_parser("plot", help="draw a mass function (needs the plot extra)",
                        description="Draw the masses, the Bel/BetP/Pls interval of every hypothesis and, for "

@@ -53,7 +53,17 @@ class InvalidMassError(BeliefError, ValueError):
 
 
 class ResourceLimitError(BeliefError, ValueError):
-    """A job would take more time or memory than a configurable limit allows; the message names the limit."""
+    """A job would take more time or memory than a configurable limit allows; the message names the limit.
+
+    Attributes
+    ----------
+    limit : str or None
+        The full name of the limit exceeded, e.g. ``"belief.batch.MAX_TABLE_ENTRIES"``.
+    """
+
+    def __init__(self, message: str, limit: str | None = None) -> None:
+        super().__init__(message)
+        self.limit = limit
 
 
 class LatticeTooLargeError(ResourceLimitError):
@@ -73,10 +83,6 @@ class CombinationTooLargeError(ResourceLimitError, InvalidMassError):
     limit : str or None
         The full name of the limit exceeded, e.g. ``"belief.plan.MAX_TUPLES"``.
     """
-
-    def __init__(self, message: str, limit: str | None = None) -> None:
-        super().__init__(message)
-        self.limit = limit
 
 
 class TotalConflictError(BeliefError, ArithmeticError):
