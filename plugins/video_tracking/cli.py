@@ -224,6 +224,10 @@ def _demo_arguments(args: argparse.Namespace) -> None:
         raise TrackingError("--demo takes no SOURCE, --init, --init-from-gt or --gt")
 
 
+def _announce(line: str) -> None:
+    print(f"belief track: {line}", file=sys.stderr, flush=True)
+
+
 def _track_demo(args: argparse.Namespace, config, out):
     """``belief track --demo``: the demo scene, tracked automatically and scored against its ground truth."""
     from . import scenes
@@ -237,7 +241,7 @@ def _track_demo(args: argparse.Namespace, config, out):
              "scene.avi": lambda path: scenes.write_video(path, scene)}
     # The tracker finds the people itself, as on a user's video; the ground truth only scores it.
     return run(scene, None, config, out, args.seed, write_video=not args.no_video,
-               progress=not args.no_progress, gt=gt, extra_outputs=extra, detections=detections)
+               progress=not args.no_progress, gt=gt, extra_outputs=extra, detections=detections, announce=_announce)
 
 
 def _track_source(args: argparse.Namespace, config, out):
@@ -264,7 +268,7 @@ def _track_source(args: argparse.Namespace, config, out):
         frames.close()
         raise
     return run(frames, plan, config, out, args.seed, write_video=not args.no_video,
-               progress=not args.no_progress, gt=gt, detections=detections)
+               progress=not args.no_progress, gt=gt, detections=detections, announce=_announce)
 
 
 def _report(args: argparse.Namespace, summary) -> None:

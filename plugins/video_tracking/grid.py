@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from . import limits
 from .errors import TrackingError
 from .executors import executor, outcomes, runs_here
 from .experiment import CELL_FORMAT, Cell, Experiment, ExperimentError, SequenceSpec
@@ -67,18 +68,8 @@ MAX_CELL_FILE_BYTES = 256 << 20
 #: The files an experiment writes at the top of its output folder (the runs go to ``cells/``).
 OUTPUT_FILES = ("experiment.json", "results.csv", "rms.csv", "summary.csv")
 
-# The cost model of one run, measured on the synthetic scenes (two walkers, 320 x 240) on one
-# core: a start of about a second (imports, rendering), then per frame about 0.26 µs per pixel
-# (background model, cues) and 10 µs per particle and target; a process of about 150 MB, the
-# frames it holds, and about 500 bytes per particle and target.  The estimate is rough (within
-# a factor of about two); it is meant to tell a run of seconds from one of hours.
-_START_SECONDS = 1.0
-_SECONDS_PER_PIXEL = 2.6e-7
-_SECONDS_PER_PARTICLE = 1.0e-5
-_BASE_BYTES = 150 << 20
-_BYTES_PER_PARTICLE = 500
-#: Frames a streamed video holds at once (decoded, the background model's, the previous one).
-_STREAMED_FRAMES = 4
+# A run's time and memory are those of belief_tracking.limits (estimate_seconds, estimate_memory), with the
+# frames a sequence holds in memory on top: a synthetic scene is rendered whole, a cut video is read whole.
 
 
 @dataclass(frozen=True)
@@ -191,12 +182,12 @@ def plan_experiment(experiment: Experiment, *, workers: int | None = None) -> Ex
     runs = len(experiment.sequences) * len(experiment.methods) * seeds
     longest, largest, total = 0.0, 0, 0.0
     for sequence in experiment.sequences:
-        frames, pixels, held, targets = _sequence_size(sequence)
+        frames, width, height, held, targets = _sequence_size(sequence)
+        pixels = width * height
         for method in experiment.methods:
             config = Cell(sequence, method, experiment.seeds[0], experiment.tracker).config()
-            work = config.particles * min(max(targets, 1), config.max_targets)
-            seconds = _START_SECONDS + frames * (pixels * _SECONDS_PER_PIXEL + work * _SECONDS_PER_PARTICLE)
-            memory = _BASE_BYTES + held * pixels * 3 + work * _BYTES_PER_PARTICLE
+            seconds = limits.estimate_seconds(config, width, height, frames, targets)
+            memory = limits.estimate_memory(config, width, height, targets, frames).total + held * pixels * 3
             label = f"{sequence.name}/{method.name}"
             if seconds > MAX_RUN_SECONDS:
                 raise ExperimentError(
@@ -260,22 +251,22 @@ def set_limits(*, max_runs: int | None = None, max_sequences: int | None = None,
 
 
 @functools.lru_cache(maxsize=256)
-def _sequence_size(sequence: SequenceSpec) -> tuple[int, int, int, int]:
-    """Frames tracked, pixels per frame, frames held in memory at once, and most targets in one frame."""
+def _sequence_size(sequence: SequenceSpec) -> tuple[int, int, int, int, int]:
+    """Frames tracked, frame width and height, frames held in memory whole, and most targets in one frame."""
     if sequence.scene is not None:
         from . import scenes
 
         config = scenes.PRESETS[sequence.scene](sequence.scene_seed)
         frames = min(sequence.frames or config.n_frames, config.n_frames)
         # A scene is rendered whole before it is tracked.
-        return frames, config.width * config.height, frames, max(1, len(config.walkers))
+        return frames, config.width, config.height, frames, max(1, len(config.walkers))
     from .motfiles import read_mot
     from .video import VideoReader
 
     where = f"sequence {sequence.name!r}"
     try:
         with contextlib.closing(VideoReader(sequence.video)) as reader:
-            count, pixels = reader.frame_count, reader.width * reader.height
+            count, width, height = reader.frame_count, reader.width, reader.height
         gt = read_mot(sequence.gt)
     except TrackingError as exc:
         raise ExperimentError(f"{where}: {exc}") from None
@@ -284,23 +275,16 @@ def _sequence_size(sequence: SequenceSpec) -> tuple[int, int, int, int]:
         frames = min(frames, sequence.frames)
         held = frames         # the first frames are read into memory (SequenceSpec.load)
     else:
-        held = _STREAMED_FRAMES
+        held = 0              # streamed: the frames of the run's own estimate only
     if len(gt):
         _, per_frame = np.unique(gt[:, 0], return_counts=True)
         targets = int(per_frame.max())
     else:
         targets = 1
-    return max(frames, 1), pixels, held, targets
+    return max(frames, 1), width, height, held, targets
 
 
-def _duration(seconds: float) -> str:
-    if seconds < 120:
-        return f"{seconds:.0f} s"
-    if seconds < 7200:
-        return f"{seconds / 60:.0f} min"
-    if seconds < 172800:
-        return f"{seconds / 3600:.1f} h"
-    return f"{seconds / 86400:.1f} days"
+_duration = limits.duration
 
 
 def _megabytes(count: int) -> str:

@@ -56,7 +56,8 @@ from belief.textfiles import regular_file
 from .errors import TrackingError
 
 __all__ = ["MAX_PIXELS", "MAX_FRAMES", "MAX_MEMORY", "LIMIT_FLAGS", "TrackingLimitError", "MemoryEstimate",
-           "estimate_memory", "check_config", "add_options", "given", "check_run", "check_pixels", "check_frames", "applied", "shown", "clipped",
+           "estimate_memory", "estimate_seconds", "duration", "long_run_notice", "run_targets",
+           "LONG_RUN_SECONDS", "check_config", "add_options", "given", "check_run", "check_pixels", "check_frames", "applied", "shown", "clipped",
            "regular_file", "image_size", "read_small_text", "load_toml", "toml_value", "check_settings_tree"]
 
 #: Pixels of one frame (4K UHD, 3840 x 2160).
@@ -95,6 +96,17 @@ _MOG2_COMPONENT_BYTES = 20       # weight, variance and three means of a mixture
 _PARTICLE_BYTES = 256            # states (5 float64) in three copies, weights, indices
 _CUE_BYTES = 128                 # a cue's likelihood and its mass function per particle
 _PAIR_BYTES = 16                 # a particle's score against every other target
+
+
+# The cost model of a run's time, measured on the synthetic scenes (two walkers, 320 x 240) on one core: a start
+# of about a second (imports, rendering), then per frame about 0.26 µs per pixel (background model, cues) and
+# 10 µs per particle and target.  It is rough (within a factor of about two): it tells a run of seconds from one
+# of hours.
+_START_SECONDS = 1.0
+_SECONDS_PER_PIXEL = 2.6e-7
+_SECONDS_PER_PARTICLE = 1.0e-5
+#: A run estimated longer than this says so, with its estimate, before it starts.
+LONG_RUN_SECONDS = 120.0
 
 
 class TrackingLimitError(TrackingError, ResourceLimitError):
@@ -312,6 +324,64 @@ def estimate_memory(config, width: int = 0, height: int = 0, targets: int | None
     return MemoryEstimate(frame_part, background, particles, targets)
 
 
+def estimate_seconds(config, width: int, height: int, frames: int, targets: int | None = None) -> float:
+    """The time a run of ``config`` takes on ``frames`` frames of ``width`` x ``height``, in seconds (rough).
+
+    Parameters
+    ----------
+    config : TrackerConfig
+    width, height, frames : int
+    targets : int, optional
+        Targets tracked at once (default ``config.max_targets``, the most the run may start).
+
+    Examples
+    --------
+    >>> from belief_tracking.config import TrackerConfig
+    >>> round(estimate_seconds(TrackerConfig(), 320, 240, 100, targets=2), 1)
+    3.2
+    """
+    targets = config.max_targets if targets is None else max(1, min(int(targets), config.max_targets))
+    per_frame = int(width) * int(height) * _SECONDS_PER_PIXEL + config.particles * targets * _SECONDS_PER_PARTICLE
+    return _START_SECONDS + int(frames) * per_frame
+
+
+def duration(seconds: float) -> str:
+    """A time in words: ``"45 s"``, ``"12 min"``, ``"3.5 h"``, ``"2.0 days"``.
+
+    >>> duration(45), duration(720), duration(12600)
+    ('45 s', '12 min', '3.5 h')
+    """
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    if seconds < 172800:
+        return f"{seconds / 3600:.1f} h"
+    return f"{seconds / 86400:.1f} days"
+
+
+def long_run_notice(config, source, targets: int | None) -> str | None:
+    """One line stating a run's estimated time and memory, when it is estimated over :data:`LONG_RUN_SECONDS`.
+
+    ``targets`` is the most tracked at once when known (an init plan); otherwise the line gives
+    the time of one target and of ``config.max_targets`` at once.
+    """
+    if not source.count:
+        return None
+    size = f"{source.count:,} frames of {source.width} x {source.height}"
+    low = estimate_seconds(config, source.width, source.height, source.count, targets or 1)
+    if low < LONG_RUN_SECONDS:
+        return None
+    memory = _bytes(estimate_memory(config, source.width, source.height, targets, source.count).total)
+    if targets is None:
+        high = estimate_seconds(config, source.width, source.height, source.count)
+        time = (f"about {duration(low)} with one target, {duration(high)} with {config.max_targets:,} at once "
+                "(max_targets)")
+    else:
+        time = f"about {duration(low)} with {targets:,} targets at once"
+    return f"{source.name}: {size} with {config.particles:,} particles a target: {time}, up to {memory} of memory"
+
+
 def _refuse_memory(estimate: MemoryEstimate, where: str, config) -> None:
     if estimate.total <= _limit("MAX_MEMORY"):
         return
@@ -344,9 +414,7 @@ def check_run(config, source, init=None) -> MemoryEstimate:
     -------
     MemoryEstimate
     """
-    targets = None
-    if init is not None and config.initiation is None:
-        targets = max(1, int(init.peak()[0]))
+    targets = run_targets(config, init)
     diagonal = math.hypot(source.width, source.height)
     for name, value in (("motion.sigma_pos", config.motion.sigma_pos), ("motion.sigma_vel", config.motion.sigma_vel),
                         ("init_sigma", config.init_sigma), ("location.sigma", config.location.sigma)):
@@ -356,6 +424,13 @@ def check_run(config, source, init=None) -> MemoryEstimate:
     estimate = estimate_memory(config, source.width, source.height, targets, source.count)
     _refuse_memory(estimate, str(source.name), config)
     return estimate
+
+
+def run_targets(config, init=None) -> int | None:
+    """The most targets a run tracks at once when its init plan says so (no automatic initiation), else None."""
+    if init is not None and config.initiation is None:
+        return max(1, int(init.peak()[0]))
+    return None
 
 
 # -- files -----------------------------------------------------------------------------------------

@@ -47,6 +47,7 @@ from typing import Optional, Protocol
 import numpy as np
 
 from .errors import TrackingError
+from . import limits
 from .limits import shown as _shown
 
 __all__ = [
@@ -152,9 +153,6 @@ def _warn_degenerate(what: str) -> None:
 
 # -- motion ---------------------------------------------------------------------------------------
 
-#: The largest standard deviation of the motion noise, in pixels (MOT coordinates stay within ±10^6).
-MAX_MOTION_SPREAD = 1e6
-
 #: The largest time step of the motion model, in frames.
 MAX_DT = 1000.0
 
@@ -200,8 +198,8 @@ class MotionConfig:
         for name in ("sigma_pos", "sigma_vel"):
             value = _non_negative(f"MotionConfig.{name}", getattr(self, name))
             # A spread beyond any frame puts every particle on the image's border (run checks: the diagonal).
-            if value > MAX_MOTION_SPREAD:
-                raise TrackingError(f"MotionConfig.{name} must be at most {MAX_MOTION_SPREAD:g} px, got {value!r}")
+            if value > limits.MAX_SPREAD:
+                raise TrackingError(f"MotionConfig.{name} must be at most {limits.MAX_SPREAD:g} px, got {value!r}")
             object.__setattr__(self, name, value)
         dt = _real("MotionConfig.dt", self.dt)
         if not 0 < dt <= MAX_DT:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import functools
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from os import PathLike
 
@@ -108,7 +109,8 @@ def output_names(write_video: bool = True, write_plot: bool = True, extra: tuple
 def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(),
         out_dir: str | PathLike[str] | OutputFolder = "track", seed: int = 0, write_video: bool = True,
         progress: bool = True, gt: np.ndarray | str | None = None, extra_outputs: dict | None = None,
-        write_plot: bool = True, detections: Detections | None = None, force: bool = False) -> Summary:
+        write_plot: bool = True, detections: Detections | None = None, force: bool = False,
+        announce: Callable[[str], None] | None = None) -> Summary:
     """Track ``source`` and write the outputs into ``out_dir``.
 
     Parameters
@@ -153,6 +155,10 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(),
     force : bool
         Write into ``out_dir`` even if it holds files that no run wrote there (those of the
         run's names are replaced, the others left).
+    announce : callable, optional
+        Receives one line before the work starts when the run is estimated to take more than
+        :data:`~belief_tracking.limits.LONG_RUN_SECONDS` (:func:`~belief_tracking.limits.long_run_notice`):
+        its frames, particles, estimated time and memory.
 
     Returns
     -------
@@ -189,6 +195,9 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(),
             check_ground_truth(gt_rows, frames.count, str(gt) if isinstance(gt, (str, PathLike)) else "the ground truth")
         _check_fit(frames, init, detections)
         limits.check_run(config, frames, init)
+        notice = limits.long_run_notice(config, frames, limits.run_targets(config, init))
+        if notice is not None and announce is not None:
+            announce(notice)
         tracker = start_tracker(config, init, seed, frames)
         timing = Timing(started)
         tracks = TracksWriter(staged.path("tracks.txt"))

@@ -382,3 +382,27 @@ def test_a_spread_larger_than_the_frame_is_refused_for_the_run():
     with pytest.raises(TrackingError, match="larger than the frame's diagonal"):
         limits.check_run(config, _Source(320, 240))
     limits.check_run(config, _Source(8000, 1000))
+
+
+def test_a_long_run_states_its_estimated_time_and_memory_before_it_starts():
+    config = TrackerConfig()
+    assert limits.long_run_notice(config, _Source(320, 240, count=100), None) is None
+    long = limits.long_run_notice(config, _Source(1920, 1080, count=20_000), None)
+    assert long.startswith("v.avi: 20,000 frames of 1920 x 1080 with ")
+    assert "with one target" in long and f"with {config.max_targets:,} at once (max_targets)" in long
+    assert "of memory" in long
+    planned = limits.long_run_notice(config, _Source(1920, 1080, count=20_000), 3)
+    assert "with 3 targets at once" in planned
+    # the time grows with the frames, the pixels and the particles
+    small = limits.estimate_seconds(config, 320, 240, 1000, 2)
+    assert limits.estimate_seconds(config, 320, 240, 2000, 2) > small
+    assert limits.estimate_seconds(config, 640, 480, 1000, 2) > small
+    assert limits.estimate_seconds(TrackerConfig(particles=1000), 320, 240, 1000, 2) > small
+
+
+def test_the_command_line_announces_a_long_run_on_standard_error(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(limits, "LONG_RUN_SECONDS", 0.0)
+    video = write_video(tmp_path / "v.avi")
+    assert main(["track", str(video), "--out", str(tmp_path / "o"), "--no-progress", "--no-video"]) == 0
+    err = capsys.readouterr().err
+    assert "belief track: " in err and "3 frames of 64 x 48" in err and "of memory" in err
