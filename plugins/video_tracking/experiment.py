@@ -80,7 +80,6 @@ import hashlib
 import json
 import os
 import re
-import stat
 import unicodedata
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, fields
@@ -91,6 +90,7 @@ import numpy as np
 
 from .errors import TrackingError
 from .extras import require
+from .limits import regular_file
 
 __all__ = [
     "ExperimentError",
@@ -526,15 +526,7 @@ def load_experiment(path: str | os.PathLike[str], data_dir: str | os.PathLike[st
 def _read_config(path: Path) -> str:
     """The text of an experiment file: a regular file of at most :data:`MAX_CONFIG_BYTES` bytes of UTF-8."""
     shown = _shown_path(str(path))
-    try:
-        info = path.stat()
-    except FileNotFoundError:
-        raise ExperimentError(f"{shown}: no such experiment file") from None
-    except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
-        raise ExperimentError(f"{shown}: not a usable path ({getattr(exc, 'strerror', None) or exc})") from None
-    if not stat.S_ISREG(info.st_mode):
-        # A FIFO would block and a device (/dev/zero) never ends: only a regular file is read.
-        raise ExperimentError(f"{shown}: not a regular file (an experiment is a TOML file)")
+    info = regular_file(path, "experiment file", ExperimentError)  # never a FIFO (it blocks) or a device
     if info.st_size > MAX_CONFIG_BYTES:
         raise ExperimentError(f"{shown}: {info.st_size:,} bytes, more than an experiment file may have "
                               f"(belief_tracking.experiment.MAX_CONFIG_BYTES = {MAX_CONFIG_BYTES:,}); "
@@ -678,17 +670,16 @@ def _resolve_file(base: Path, text: str, what: str) -> str:
     """The absolute path of an existing regular file named by ``text`` (relative to ``base``)."""
     if not text.strip() or "\0" in text:
         raise ExperimentError(f"{what} must be the path of a file, got {_shown(text)!r}")
-    resolved = base / text
     try:
         resolved = (base / Path(text).expanduser()).resolve()
-        info = resolved.stat()
-    except FileNotFoundError:
-        raise ExperimentError(f"{what} file not found: {_shown_path(str(resolved))}") from None
     except (OSError, RuntimeError, ValueError) as exc:  # a name too long, a symlink loop
         raise ExperimentError(f"{what}: not a usable path {_shown(text)!r} "
                               f"({getattr(exc, 'strerror', None) or exc})") from None
-    if not stat.S_ISREG(info.st_mode):
-        raise ExperimentError(f"{what}: {_shown_path(str(resolved))} is not a regular file")
+    where, _, key = what.rpartition(": ")
+    try:
+        regular_file(resolved, f"{key} file", ExperimentError)
+    except ExperimentError as exc:
+        raise ExperimentError(f"{where}: {exc}" if where else str(exc)) from None
     return str(resolved)
 
 

@@ -297,7 +297,7 @@ def test_an_automatic_sequence_is_scored_by_iou_pairing():
     ({"sequences": ["crossing", "crossing"]}, "sequences must have distinct names; repeated: crossing"),
     ({"sequences": ["crossing"], "methods": [{"name": "a"}], "grid": {}}, "either [[methods]] or [grid]"),
     ({"sequences": ["crossing"], "methods": [{"rule": "dsmc"}]}, "every [[methods]] entry needs a name"),
-    ({"sequences": [{"name": "v", "video": "missing.avi", "gt": "gt.txt"}]}, "video file not found"),
+    ({"sequences": [{"name": "v", "video": "missing.avi", "gt": "gt.txt"}]}, "cannot read video file"),
     ({"sequences": [{"name": "v", "scene": "crossing", "init": "magic"}]}, "init must be one of gt, automatic"),
 ])
 def test_bad_configurations_name_the_problem(mapping, message, tmp_path):
@@ -317,7 +317,7 @@ def test_a_recorded_video_is_resolved_against_the_data_folder(tmp_path, rendered
     config = tmp_path / "grid.toml"
     config.write_text('seeds = [0]\ntracker = { particles = 10 }\n'
                       '[[sequences]]\nname = "recorded"\nvideo = "crossing.avi"\ngt = "gt.txt"\n', encoding="utf-8")
-    with pytest.raises(ExperimentError, match="grid.toml: sequence 'recorded': video file not found"):
+    with pytest.raises(ExperimentError, match="grid.toml: sequence 'recorded': cannot read video file .*: no such file"):
         load_experiment(config)
     experiment = load_experiment(config, data_dir=data)
     assert experiment.name == "grid"
@@ -390,7 +390,7 @@ def test_detections_leave_the_cues_and_other_sequences_keys_alone(tmp_path):
 
 
 def test_a_bad_detection_file_is_named(tmp_path):
-    with pytest.raises(ExperimentError, match=r"sequence 'v': detections file not found: .*nothing\.txt"):
+    with pytest.raises(ExperimentError, match=r"sequence 'v': cannot read detections file .*nothing\.txt.*: no such file"):
         experiment_from_mapping({"sequences": [{"name": "v", "scene": "crossing", "detections": "nothing.txt"}]},
                                 base_dir=tmp_path)
     missing = SequenceSpec("v", scene="crossing", frames=5, detections=str(tmp_path / "gone.txt"))
@@ -418,7 +418,8 @@ def test_the_cli_reports_a_bad_file_in_one_line(tmp_path, capsys):
     assert err.count("\n") == 1 and "Traceback" not in err
     assert err.startswith("belief: error: ") and "unknown rule 'pcr7'" in err
     assert main(["experiment", str(tmp_path / "missing.toml")]) == 1
-    assert "no such experiment file" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "cannot read experiment file" in err and "no such file" in err
     (tmp_path / "broken.toml").write_text("seeds = [0\n", encoding="utf-8")
     assert main(["experiment", str(tmp_path / "broken.toml")]) == 1
     assert "not valid TOML" in capsys.readouterr().err

@@ -149,8 +149,8 @@ def test_a_saved_run_s_file_name_stays_a_plain_visible_name(name):
     ({"scene": "crossing", "init": 1}, "init must be text, got int 1"),
     ({"scene": "crossing", "bogus": 1}, "[[sequences]] entry 1: unknown key 'bogus'"),
     ({"video": "a\0b", "gt": "gt.txt"}, "video must be the path of a file"),
-    ({"video": "v" * 5000, "gt": "gt.txt"}, "video: not a usable path"),
-    ({"video": "/dev/null", "gt": "/dev/null"}, "/dev/null is not a regular file"),
+    ({"video": "v" * 5000, "gt": "gt.txt"}, "File name too long"),
+    ({"video": "/dev/null", "gt": "/dev/null"}, "it is a device, not a regular file"),
 ])
 def test_every_sequence_key_is_typed_and_named_with_its_table(entry, message, tmp_path):
     with pytest.raises(ExperimentError) as info:
@@ -195,14 +195,14 @@ def test_a_deeply_nested_experiment_is_one_line(tmp_path, capsys):
 def test_an_experiment_file_must_be_a_regular_file_of_bounded_size(tmp_path, monkeypatch):
     with pytest.raises(ExperimentError, match="not a regular file"):
         load_experiment(os.devnull)
-    with pytest.raises(ExperimentError, match="not a regular file"):
+    with pytest.raises(ExperimentError, match="it is a directory"):
         load_experiment(tmp_path)
     config = tmp_path / "grid.toml"
     config.write_text(TINY_TOML)
     monkeypatch.setattr(experiment_module, "MAX_CONFIG_BYTES", 20)
     with pytest.raises(ExperimentError, match=r"bytes, more than .*MAX_CONFIG_BYTES = 20"):
         load_experiment(config)
-    with pytest.raises(ExperimentError, match="not a usable path"):
+    with pytest.raises(ExperimentError, match="File name too long"):
         load_experiment(tmp_path / ("x" * 5000))
 
 
