@@ -102,12 +102,12 @@ class MeasurePlan:
     def _table(self, name: str, relation) -> np.ndarray:
         """The (K, Q) table of ``name``: from the elements' codes where they have them, else ``relation`` pair by pair."""
         k, q = len(self.focal), len(self.queries)
-        _check_entries(k * q, f"a table of {k:,} focal elements by {q:,} queries")
+        check_table_entries(k * q, f"a table of {k:,} focal elements by {q:,} queries")
         coded = self._coded if k * q else None
         if coded is not None and (name != "meet_cardinality" or coded.weights is not None):
             table = coded.table(name)
         else:
-            _check_entries(k * q, f"a table of {k:,} focal elements by {q:,} queries compared element by element "
+            check_table_entries(k * q, f"a table of {k:,} focal elements by {q:,} queries compared element by element "
                            "(the model has too many Venn regions to code them)", one_by_one=True)
             table = np.array(
                 [[relation(x, a) for a in self.queries] for x in self.focal], dtype=np.float64
@@ -168,8 +168,8 @@ class MeasurePlan:
         focal, queries = self.focal, self.queries
         units = int(self.unit.sum())
         what = f"the DSmP table of {len(focal):,} focal elements by {len(queries):,} queries"
-        _check_entries(len(focal) ** 2 * len(queries), what)
-        _check_entries(units * len(focal) * len(queries), what + " compared element by element", one_by_one=True)
+        check_table_entries(len(focal) ** 2 * len(queries), what)
+        check_table_entries(units * len(focal) * len(queries), what + " compared element by element", one_by_one=True)
         table = np.zeros((len(focal), len(focal), len(queries)))
         for z, zel in enumerate(focal):
             if not self.unit[z]:
@@ -183,20 +183,20 @@ class MeasurePlan:
     def unit_in_focal(self) -> np.ndarray:
         """[C(Z) = 1 and Z ⊆ X], shape (K_Z, K_X)."""
         focal = self.focal
-        _check_entries(len(focal) ** 2, f"the DSmP table of {len(focal):,} focal elements by themselves")
+        check_table_entries(len(focal) ** 2, f"the DSmP table of {len(focal):,} focal elements by themselves")
         return np.array(
             [[float(self.unit[z] and zel <= xel) for xel in focal] for z, zel in enumerate(focal)]
         ).reshape(len(focal), len(focal))
 
 
-def _check_entries(entries: int, what: str, one_by_one: bool = False) -> None:
+def check_table_entries(entries: int, what: str, one_by_one: bool = False, advice: str = "ask for fewer queries") -> None:
     """Refuse a table of more entries than :data:`MAX_TABLE_ENTRIES` (:data:`MAX_ELEMENT_ENTRIES` ``one_by_one``)."""
     name = "MAX_ELEMENT_ENTRIES" if one_by_one else "MAX_TABLE_ENTRIES"
     limit = getattr(_module, name)
     if entries > limit:
         raise ResourceLimitError(
-            f"{what} holds {entries:,} entries, more than belief.batch.{name} = {limit:,}; ask for fewer "
-            f"queries or raise belief.batch.{name}", f"belief.batch.{name}")
+            f"{what} holds {entries:,} entries, more than belief.batch.{name} = {limit:,}; {advice} "
+            f"or raise belief.batch.{name}", f"belief.batch.{name}")
 
 
 @lru_cache(maxsize=256)

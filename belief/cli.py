@@ -289,8 +289,13 @@ def _run_measuring(args: argparse.Namespace) -> int:
         flag = next((f for f, name in TABLE_LIMIT_FLAGS.items() if name == exc.limit), None)
         if flag is None:
             raise
-        hint = "ask for fewer queries (--query PROP ...) or" if args.measuring is _cmd_measures else "or"
-        message = str(exc).replace(f"ask for fewer queries or raise {exc.limit}", f"{hint} raise it with --{flag} N")
+        message = str(exc).replace(f"or raise {exc.limit}", f"or raise it with --{flag} N")
+        if args.measuring is _cmd_measures:
+            message = message.replace("ask for fewer queries", "ask for fewer queries (--query PROP ...)")
+        elif args.measuring is _cmd_uncertainty:
+            # discord, dissonance and confusion weigh BetP, Pls or Bel of every focal element
+            message = message.replace("ask for fewer queries", "leave out discord, dissonance and confusion "
+                                      "(--measure nonspecificity deng ambiguity)")
         raise ResourceLimitError(message, exc.limit) from None
 
 

@@ -26,11 +26,12 @@ from typing import Union
 
 import numpy as np
 
-from belief.batch import MassBatch
+from belief.batch import MassBatch, check_table_entries
 from belief.errors import InvalidMassError, UnknownMeasureError
 from belief.frame import Element
 from belief.mass import MassFunction
 from belief.model import Model
+from belief.relation_tables import coded_relations
 from belief.rules_common import check_same_model
 
 __all__ = ["jousselme_distance", "euclidean_distance", "tessem_distance", "distance", "conflict",
@@ -80,6 +81,9 @@ def _result(values: np.ndarray, single: bool):
 
 
 # -- Jousselme ------------------------------------------------------------------------------------------
+_FEWER = "use mass functions of fewer focal elements"
+
+
 @lru_cache(maxsize=256)
 def jousselme_matrix(model: Model, focal: tuple[Element, ...]) -> np.ndarray:
     """The similarity matrix D of Jousselme's distance over a list of elements.
@@ -110,7 +114,20 @@ def jousselme_matrix(model: Model, focal: tuple[Element, ...]) -> np.ndarray:
            [0.66666667, 0.66666667, 1.        ]])
     """
     size = len(focal)
+    check_table_entries(size * size, f"Jousselme's matrix of {size:,} focal elements", advice=_FEWER)
     cards = [model.cardinality(x) for x in focal]
+    coded = coded_relations(model, focal, focal) if size else None
+    if coded is not None and coded.weights is not None:
+        inter = coded.table("meet_cardinality")
+        card = np.array(cards, dtype=np.float64)
+        union = card[:, None] + card[None, :] - inter      # exact: integers below 2^53
+        with np.errstate(invalid="ignore", divide="ignore"):
+            matrix = np.where((card[:, None] > 0) & (card[None, :] > 0), inter / union, 0.0)
+        np.fill_diagonal(matrix, 1.0)
+        matrix.flags.writeable = False
+        return matrix
+    check_table_entries(size * size, f"Jousselme's matrix of {size:,} focal elements compared element by element "
+                        "(the model has too many Venn regions to code them)", one_by_one=True, advice=_FEWER)
     matrix = np.zeros((size, size))
     for a in range(size):
         matrix[a, a] = 1.0

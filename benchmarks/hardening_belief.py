@@ -243,6 +243,8 @@ def prepare(folder: Path) -> None:
     write("vacuous20.json", _bba(names, {"h0": 0.5, "|".join(names): 0.5}, shafer))
     thousand = {"|".join(names[b] for b in range(20) if k >> b & 1): 1 / 1000 for k in range(1, 1001)}
     write("thousand.json", _bba(names, thousand, shafer))   # sums to 1 within 1e-15
+    ten_thousand = {"|".join(names[b] for b in range(20) if k >> b & 1): 1 / 10_000 for k in range(1, 10_001)}
+    write("tenk.json", _bba(names, ten_thousand, shafer))
 
 
 def cases() -> list[tuple[str, list[Step]]]:
@@ -335,6 +337,11 @@ def cases() -> list[tuple[str, list[Step]]]:
                                                  "--json"], "either", check_bba),
         one("11 10^6 focal elements (transform)", ["transform", "million.json", "--pignistic", "--json"],
             "either", check_probability),
+        one("11 10^3 focal elements (jousselme)", ["distance", "thousand.json", "vacuous20.json"], "either"),
+        one("11 10^4 focal elements (jousselme)", ["distance", "tenk.json", "vacuous20.json"], "either"),
+        one("11 10^6 focal elements (jousselme)", ["distance", "million.json", "vacuous20.json"], "either"),
+        one("11 10^4 focal elements (uncertainty)", ["uncertainty", "tenk.json"], "either"),
+        one("11 10^4 focal elements (decide)", ["decide", "tenk.json"], "either"),
     ]
     return listed
 

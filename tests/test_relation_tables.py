@@ -155,3 +155,39 @@ def test_the_command_line_names_the_option_that_raises_a_table_limit(tmp_path, c
     assert main(["measures", str(path), "--max-table-entries", "1600", "--json"]) == 0
     table = json.loads(capsys.readouterr().out)
     assert len(table) == 40 and table["h0"]["bel"] == 1 / 40
+
+
+def literal_jousselme(model, focal):
+    size = len(focal)
+    matrix = np.eye(size)
+    for a in range(size):
+        for b in range(a + 1, size):
+            union = model.cardinality(focal[a] | focal[b])
+            if union and model.cardinality(focal[a]) and model.cardinality(focal[b]):
+                matrix[a, b] = matrix[b, a] = model.cardinality(focal[a] & focal[b]) / union
+    return matrix
+
+
+@settings(max_examples=100, deadline=None)
+@given(case=mass_cases(min_n=1, max_n=5, max_focal=6, subnormal=None))
+def test_jousselme_s_matrix_from_codes_equals_the_one_read_element_by_element(case):
+    from belief.distances import jousselme_matrix
+
+    m = case.build()
+    focal = tuple(m.focal)
+    np.testing.assert_array_equal(jousselme_matrix(m.model, focal), literal_jousselme(m.model, focal))
+
+
+def test_jousselme_s_distance_of_many_focal_elements_is_refused_or_fast(monkeypatch):
+    from belief.distances import jousselme_distance
+
+    names = [f"y{i}" for i in range(12)]
+    model = Model.shafer(Frame(names))
+    masses = {"|".join(names[b] for b in range(12) if k >> b & 1): 1 / 2000 for k in range(1, 2001)}
+    m = MassFunction(masses, model=model)
+    vacuous = MassFunction({"|".join(names): 1.0}, model=model)
+    with monkeypatch.context() as patch:
+        patch.setattr(belief.batch, "MAX_TABLE_ENTRIES", 10**6)
+        with pytest.raises(ResourceLimitError, match="Jousselme's matrix of 2,001 focal elements"):
+            jousselme_distance(m, vacuous)
+    assert 0 < jousselme_distance(m, vacuous) < 1
