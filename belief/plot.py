@@ -17,14 +17,21 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Union
 
+import numpy as np
+
 from belief.errors import BeliefError, FormatError
 from belief.frame import Element
 from belief.mass import MassFunction
 
-__all__ = ["plot_mass", "focal_hasse_edges", "MAX_HASSE_HYPOTHESES", "MissingPlotExtraError"]
+__all__ = ["plot_mass", "focal_hasse_edges", "MAX_HASSE_HYPOTHESES", "MAX_PLOTTED_FOCAL", "MAX_PLOTTED_HYPOTHESES",
+           "MissingPlotExtraError"]
 
 #: Frames up to this many hypotheses get the Hasse diagram of their focal elements.
 MAX_HASSE_HYPOTHESES = 4
+#: Focal elements drawn as bars: beyond it, the largest masses and one bar for the rest.
+MAX_PLOTTED_FOCAL = 30
+#: Hypotheses drawn with their Bel, BetP and Pls: beyond it, those of the largest BetP.
+MAX_PLOTTED_HYPOTHESES = 40
 
 
 class MissingPlotExtraError(BeliefError, ModuleNotFoundError):
@@ -105,20 +112,29 @@ def plot_mass(m: MassFunction, out: Union[str, Path, None] = None, *, title: str
     if title:
         figure.suptitle(title)
 
-    labels = [str(e) for e in m.focal]
-    masses = m.values.tolist()
-    bars = axes[0].bar(range(len(labels)), masses, color="tab:blue")
-    axes[0].bar_label(bars, labels=[f"{v:.3g}" for v in masses], fontsize=8)
+    labels, masses, rest = _largest_masses(m)
+    colours = ["tab:blue"] * len(masses)
+    if rest is not None:
+        labels, masses, colours = labels + [rest[0]], masses + [rest[1]], colours + ["tab:gray"]
+    bars = axes[0].bar(range(len(labels)), masses, color=colours)
+    if len(masses) <= 12:                   # more labels than that overlap
+        axes[0].bar_label(bars, labels=[f"{v:.3g}" for v in masses], fontsize=8)
     axes[0].set_xticks(range(len(labels)), labels, rotation=45 if len(labels) > 6 else 0, ha="right"
                        if len(labels) > 6 else "center")
     axes[0].set_ylim(0, 1.08)
     axes[0].set_ylabel("mass m(A)")
-    axes[0].set_title("Mass of each focal element: m(A), W (1)", fontsize=10)
+    shown = "" if rest is None else f" (the {len(masses) - 1} largest of {len(m.focal):,})"
+    axes[0].set_title(f"Mass of each focal element{shown}: m(A), W (1)", fontsize=10)
 
     batch = m.batch()
     bel = batch.bel(hypotheses)[0]
     pls = batch.pls(hypotheses)[0]
     betp = batch.betp(hypotheses)[0]
+    total = len(hypotheses)
+    if total > MAX_PLOTTED_HYPOTHESES:
+        keep = np.sort(np.argsort(-betp, kind="stable")[:MAX_PLOTTED_HYPOTHESES])
+        hypotheses = [hypotheses[i] for i in keep]
+        bel, pls, betp = bel[keep], pls[keep], betp[keep]
     rows = range(len(hypotheses))
     axes[1].hlines(rows, bel, pls, color="tab:gray", linewidth=6, alpha=0.6, label="[Bel, Pls]")
     axes[1].plot(bel, rows, "|", color="tab:blue", markersize=14, label="Bel, W (8)")
@@ -129,7 +145,8 @@ def plot_mass(m: MassFunction, out: Union[str, Path, None] = None, *, title: str
     axes[1].set_xlabel("value")
     axes[1].set_ylim(len(hypotheses) - 0.5, -1.6)
     axes[1].legend(fontsize=8, loc="upper center", ncols=4, handlelength=1.2)
-    axes[1].set_title("Belief, pignistic probability and plausibility: Bel ≤ BetP ≤ Pls", fontsize=10)
+    shown = "" if total <= MAX_PLOTTED_HYPOTHESES else f" (the {len(hypotheses)} of largest BetP of {total:,})"
+    axes[1].set_title(f"Belief, pignistic probability and plausibility{shown}: Bel ≤ BetP ≤ Pls", fontsize=10)
 
     if hasse:
         _draw_hasse(axes[2], m)
@@ -139,6 +156,18 @@ def plot_mass(m: MassFunction, out: Union[str, Path, None] = None, *, title: str
         except ValueError as exc:                          # an unknown image format
             raise FormatError(f"cannot write the picture {str(out)!r}: {exc}") from None
     return figure
+
+
+def _largest_masses(m: MassFunction) -> tuple[list[str], list[float], tuple[str, float] | None]:
+    """Labels and masses of the focal elements drawn (canonical order), and the label and mass of the rest, if any."""
+    values = m.values
+    if len(values) <= MAX_PLOTTED_FOCAL:
+        return [str(e) for e in m.focal], values.tolist(), None
+    keep = np.sort(np.argsort(-values, kind="stable")[:MAX_PLOTTED_FOCAL])
+    focal = m.focal
+    others = len(values) - len(keep)
+    rest = float(values.sum() - values[keep].sum())
+    return [str(focal[i]) for i in keep], values[keep].tolist(), (f"the other {others:,}", max(rest, 0.0))
 
 
 def _draw_hasse(axes, m: MassFunction) -> None:

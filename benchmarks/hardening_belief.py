@@ -342,6 +342,8 @@ def cases() -> list[tuple[str, list[Step]]]:
         one("11 10^6 focal elements (jousselme)", ["distance", "million.json", "vacuous20.json"], "either"),
         one("11 10^4 focal elements (uncertainty)", ["uncertainty", "tenk.json"], "either"),
         one("11 10^4 focal elements (decide)", ["decide", "tenk.json"], "either"),
+        one("11 10^4 focal elements (plot)", ["plot", "tenk.json", "--out", "tenk.png"], "either"),
+        one("11 10^6 focal elements (plot)", ["plot", "million.json", "--out", "million.png"], "either"),
     ]
     return listed
 

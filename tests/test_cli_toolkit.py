@@ -179,3 +179,22 @@ def test_transform_refuses_options_of_other_transforms(capsys, files, option, ex
     code, out, err = run(capsys, "transform", files["first"], *option, *extra)
     assert code == 2 and out == ""
     assert f"{extra[0]} does not go with {option[0]}" in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_plot_of_many_focal_elements_and_hypotheses_draws_the_largest_and_says_so():
+    pytest.importorskip("matplotlib")
+    from belief import Frame, MassFunction, Model
+    from belief.plot import MAX_PLOTTED_FOCAL, MAX_PLOTTED_HYPOTHESES, plot_mass
+
+    names = [f"h{i}" for i in range(60)]
+    masses = {name: (i + 1) / 1830 for i, name in enumerate(names)}        # 1 + 2 + ... + 60 = 1830
+    m = MassFunction(masses, model=Model.shafer(Frame(names)))
+    figure = plot_mass(m)
+    bars, intervals = figure.axes[0], figure.axes[1]
+    assert bars.get_title().startswith(f"Mass of each focal element (the {MAX_PLOTTED_FOCAL} largest of 60)")
+    ticks = [t.get_text() for t in bars.get_xticklabels()]
+    assert ticks[:-1] == names[-MAX_PLOTTED_FOCAL:] and ticks[-1] == "the other 30"
+    heights = [p.get_height() for p in bars.patches]
+    assert heights[-1] == pytest.approx(sum(range(1, 31)) / 1830) and sum(heights) == pytest.approx(1.0)
+    assert f"(the {MAX_PLOTTED_HYPOTHESES} of largest BetP of 60)" in intervals.get_title()
+    assert [t.get_text() for t in intervals.get_yticklabels()] == names[-MAX_PLOTTED_HYPOTHESES:]
