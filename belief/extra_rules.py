@@ -33,7 +33,7 @@ from belief.batch import MassBatch
 from belief.errors import CombinationTooLargeError, InvalidMassError, ModelError
 from belief.frame import Element
 from belief.model import Model
-from belief.plan import check_joint
+from belief.plan import check_joint, count_text
 from belief.rules import combine, register_rule
 
 __all__ = ["cautious", "bold", "average", "murphy", "pcr5_plus", "pcr6_plus", "keeping_index", "MAX_PLUS_TUPLES"]
@@ -372,7 +372,7 @@ def _pcr_plus(sources: Sequence[MassBatch], model: Model, rule: str) -> MassBatc
         count *= len(f)
     if count > MAX_PLUS_TUPLES:
         raise CombinationTooLargeError(
-            f"joint {rule} combination of {len(sources)} sources visits {count:,} tuples of focal elements, more than "
+            f"joint {rule} combination of {len(sources)} sources visits {count_text(count)} tuples of focal elements, more than "
             f"belief.extra_rules.MAX_PLUS_TUPLES = {MAX_PLUS_TUPLES:,}; use fewer focal elements or sources, or raise "
             "belief.extra_rules.MAX_PLUS_TUPLES", limit="belief.extra_rules.MAX_PLUS_TUPLES")
     check_joint(rule, [len(f) for f in focal], rows, "pcr", True, rule == "pcr5_plus")

@@ -733,6 +733,19 @@ def joint_cost(sizes: Sequence[int], rows: int = 1, kind: str = "pcr", pcr5: boo
     return JobCost(tuples, work, tuples * s * _ENTRY_BYTES[kind])
 
 
+def count_text(count: int) -> str:
+    """A count for a message: with thousands separators, or as a power of ten beyond 24 digits.
+
+    >>> count_text(16_777_216), count_text(3 ** 300)
+    ('16,777,216', 'about 1.4 x 10^143')
+    """
+    digits = len(str(count))
+    if digits <= 24:
+        return f"{count:,}"
+    head = int(str(count)[:3]) / 100
+    return f"about {head:.1f} x 10^{digits - 1}"
+
+
 def _refuse(what: str, limit: str, value: int, unit: str = "") -> CombinationTooLargeError:
     return CombinationTooLargeError(f"{what}, more than belief.plan.{limit} = {value:,}{unit}; use fewer focal "
                                     f"elements, sources or rows, or raise belief.plan.{limit}",
@@ -762,17 +775,17 @@ tuples of focal elements, more than belief.plan.MAX_TUPLES = 4,000,000; use fewe
 or raise belief.plan.MAX_TUPLES
     """
     cost = joint_cost(sizes, rows, kind, pcr5)
-    what = f"joint {rule} combination of {len(sizes)} sources visits {cost.tuples:,} tuples of focal elements"
+    what = f"joint {rule} combination of {len(sizes)} sources visits {count_text(cost.tuples)} tuples of focal elements"
     if cost.tuples > MAX_TUPLES:
         raise _refuse(what, "MAX_TUPLES", MAX_TUPLES)
     if cost.tuples > MAX_ELEMENT_TUPLES and not (fast() if callable(fast) else fast):
         raise _refuse(what + " element by element (the model gives them no 64-bit codes)", "MAX_ELEMENT_TUPLES",
                       MAX_ELEMENT_TUPLES)
     if cost.work > MAX_WORK:
-        raise _refuse(f"{what} in {rows:,} row{'s' if rows != 1 else ''}, about {cost.work:,} units of work",
+        raise _refuse(f"{what} in {rows:,} row{'s' if rows != 1 else ''}, about {count_text(cost.work)} units of work",
                       "MAX_WORK", MAX_WORK)
     if cost.bytes > MAX_BYTES:
-        raise _refuse(f"{what}, with index tables of about {cost.bytes:,} bytes", "MAX_BYTES", MAX_BYTES, " bytes")
+        raise _refuse(f"{what}, with index tables of about {count_text(cost.bytes)} bytes", "MAX_BYTES", MAX_BYTES, " bytes")
     return cost
 
 
@@ -809,7 +822,7 @@ class FoldBudget:
         cost = joint_cost((left, right), self.rows, "fold")
         self.tuples += cost.tuples
         self.work += cost.work
-        what = (f"{self.rule} of {self.sources} sources, folded pairwise, would visit {self.tuples:,} tuples of focal "
+        what = (f"{self.rule} of {self.sources} sources, folded pairwise, would visit {count_text(self.tuples)} tuples of focal "
                 f"elements by source {source} (its partial result has {left:,} focal elements)")
         if cost.tuples > MAX_TUPLES:
             raise _refuse(what, "MAX_TUPLES", MAX_TUPLES)
@@ -820,10 +833,10 @@ class FoldBudget:
                 raise _refuse(f"{what} element by element ({self.slow_reason})", "MAX_ELEMENT_TUPLES",
                               MAX_ELEMENT_TUPLES)
         if self.work > MAX_WORK:
-            raise _refuse(f"{what}, about {self.work:,} units of work in {self.rows:,} row"
+            raise _refuse(f"{what}, about {count_text(self.work)} units of work in {self.rows:,} row"
                           f"{'s' if self.rows != 1 else ''}", "MAX_WORK", MAX_WORK)
         if cost.bytes > MAX_BYTES:
-            raise _refuse(f"{what}, with index tables of about {cost.bytes:,} bytes", "MAX_BYTES", MAX_BYTES,
+            raise _refuse(f"{what}, with index tables of about {count_text(cost.bytes)} bytes", "MAX_BYTES", MAX_BYTES,
                           " bytes")
 
 
