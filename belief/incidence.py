@@ -178,7 +178,7 @@ def incidence(focal: Sequence[Element], queries: Sequence[Element], model: Model
     terms = [x.terms for x in focal]
     flat = list(chain.from_iterable(terms))
     lengths = list(map(int.bit_length, flat))
-    own = list(map(is_, map(_own_bits(frame).__getitem__, lengths), flat))
+    own = list(map(is_, map(own_bits(frame).__getitem__, lengths), flat))
     if not all(own) and not all([t.bit_count() == 1 for t, o in zip(flat, own) if not o]):
         return None                             # an intersection: not a union of hypotheses
     counts = list(map(len, terms))
@@ -229,7 +229,7 @@ def _union_table(frame: Frame, masks: Sequence[int], sort: bool, columns: np.nda
                  width: int) -> tuple[Incidence, np.ndarray | None]:
     """:func:`union_incidence` of queries found by :func:`query_columns`."""
     lengths = list(map(int.bit_length, masks))
-    own = list(map(is_, map(_own_bits(frame).__getitem__, lengths), masks))
+    own = list(map(is_, map(own_bits(frame).__getitem__, lengths), masks))
     if all(own):
         # Single hypotheses only, each the frame's own bit (a Bayesian mass function read from names): one entry
         # each, and their canonical order is that of their bit lengths, all distinct.
@@ -297,7 +297,7 @@ def query_columns(frame: Frame, queries) -> tuple[np.ndarray | None, int] | None
         return None
     if None not in positions:
         return _columns(len(frame), positions)
-    bits = _own_bits(frame)
+    bits = own_bits(frame)
     positions = []
     for q in queries:
         if type(q) is str:
@@ -324,7 +324,7 @@ def _columns(n: int, positions: list[int]) -> tuple[np.ndarray, int] | None:
     return columns, len(positions)
 
 
-def _own_bits(frame: Frame) -> tuple:
+def own_bits(frame: Frame) -> tuple:
     """``None`` and the frame's hypothesis bits: item i + 1 is the bit of hypothesis i, the ``int`` of length i + 1.
 
     A mask ``m`` is a hypothesis's own bit object when ``bits[m.bit_length()] is m``: over
@@ -386,7 +386,7 @@ def canonical_masks(frame: Frame, masks: Sequence[int]) -> list[int]:
     [2, 3, 1, 0]
     """
     lengths = list(map(int.bit_length, masks))
-    return _canonical(frame, masks, lengths, list(map(is_, map(_own_bits(frame).__getitem__, lengths), masks)))
+    return _canonical(frame, masks, lengths, list(map(is_, map(own_bits(frame).__getitem__, lengths), masks)))
 
 
 def _canonical(frame: Frame, masks: Sequence[int], lengths: list[int], own: list[bool]) -> list[int]:

@@ -32,10 +32,12 @@ order, within a relative error of n·2⁻⁵³ of each mass (sums of non-negativ
 from __future__ import annotations
 
 from collections.abc import Sequence
+from operator import is_
 
 import numpy as np
 
 from belief.bayesian_blocks import sums_of_the_others
+from belief.incidence import own_bits
 from belief.mass import MassFunction, mass_from_masks
 from belief.model import Model
 from belief.rules_classic import WIDE_SCALE, conjunctive, dempster, dsmc, yager
@@ -100,18 +102,21 @@ def _read(m: MassFunction) -> SingletonSource | None:
     if held is not None:
         # Bit masks, maybe not in canonical order: the kernels scatter by position, so no order is needed.
         masks, floats = held
-        positions = []
-        masses = []
+        lengths = list(map(int.bit_length, masks))
+        # A hypothesis read from its name is the frame's own bit object: known single without reading its bits.
+        own = list(map(is_, map(own_bits(m.frame).__getitem__, lengths), masks))
+        if not all(own) and any(mask & (mask - 1) for mask, known in zip(masks, own) if not known):
+            return None
+        # A single hypothesis is at the position its bit length gives; ∅ is the mask 0 (at most one).
+        positions = np.array(lengths, dtype=np.intp)
+        masses = np.array(floats, dtype=np.float64)
+        positions -= 1
         empty = 0.0
-        for mask, mass in zip(masks, floats):
-            if not mask:
-                empty = mass
-            elif mask & (mask - 1):
-                return None
-            else:
-                positions.append(mask.bit_length() - 1)
-                masses.append(mass)
-        return SingletonSource(np.array(positions, dtype=np.intp), np.array(masses, dtype=np.float64), float(empty))
+        if len(positions) and positions.min() < 0:
+            keep = positions >= 0
+            empty = float(masses[~keep][0])
+            positions, masses = positions[keep], masses[keep]
+        return SingletonSource(positions, masses, empty)
     positions = []
     masses = []
     empty = 0.0
