@@ -43,8 +43,35 @@ class _Parser(argparse.ArgumentParser):
 
 
 # -- helpers ------------------------------------------------------------------------------------
+#: The name that stands for standard input where a command reads a file (``belief combine ... --json | belief
+#: transform - --pignistic``).
+STDIN = "-"
+_stdin = {"read": False}
+
+
 def _read_json(path: str, what: str) -> Any:
+    if path == STDIN:
+        return load_json(_stdin_text(what), f"{what} on standard input")
     return load_json(read_text(path, what), f"{what} {path!r}")
+
+
+def _stdin_text(what: str) -> str:
+    """Standard input as UTF-8 text, read once per command and no more than ``MAX_TEXT_BYTES``."""
+    from belief import textfiles
+
+    if _stdin["read"]:
+        raise CommandError(f"belief: error: standard input ('-') can be read only once, and the {what} asks for it "
+                           "again; save one of them to a file")
+    _stdin["read"] = True
+    limit = textfiles.MAX_TEXT_BYTES
+    data = sys.stdin.buffer.read(limit + 1)
+    if len(data) > limit:
+        raise FormatError(f"cannot read the {what} on standard input: more than belief.textfiles.MAX_TEXT_BYTES = "
+                          f"{limit:,} bytes")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise FormatError(f"cannot read the {what} on standard input: not UTF-8 text") from None
 
 
 def _read_bba(path: str) -> MassFunction:
@@ -52,7 +79,7 @@ def _read_bba(path: str) -> MassFunction:
     try:
         return MassFunction.from_dict(data)
     except BeliefError as exc:
-        raise type(exc)(f"{path}: {exc}") from None
+        raise type(exc)(f"{'standard input' if path == STDIN else path}: {exc}") from None
 
 
 def _model_from(path: str, frame: Frame, data: Any) -> Model:
@@ -331,6 +358,11 @@ def _limits(values: dict):
 def _cmd_rules(args: argparse.Namespace) -> int:
     from belief.rules import RULES
 
+    if args.json:
+        _print_json([{"name": info.name, "aliases": list(info.aliases), "summary": info.summary,
+                      "associative": info.associative, "keeps_conflict": info.keeps_conflict,
+                      "options": list(info.options)} for info in RULES.values()])
+        return 0
     rows = []
     for info in RULES.values():
         names = info.name + (f" ({', '.join(info.aliases)})" if info.aliases else "")
@@ -478,7 +510,9 @@ def _table_limit_options(parser: argparse.ArgumentParser) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser, with the plugins' subcommands registered."""
-    parser = _Parser(prog="belief", description="Evidence fusion with belief functions (DST and DSmT).")
+    parser = _Parser(prog="belief", description="Evidence fusion with belief functions (DST and DSmT).",
+                     epilog="Wherever a command reads a BBA, model or rates file, '-' reads it from standard input "
+                            "(once a command), so that --json output feeds the next command.")
     from belief import __version__
 
     parser.add_argument("--version", action="version", version=f"belief {__version__}")
@@ -535,6 +569,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_combine)
 
     p = sub.add_parser("rules", help="list the combination rules", description="List the combination rules.")
+    p.add_argument("--json", action="store_true",
+                   help="print a JSON list: name, aliases, summary, associative, keeps_conflict, options")
     p.set_defaults(func=_cmd_rules)
 
     p = sub.add_parser("decide", help="the hypothesis (or candidate) of largest Bel, Pls, BetP or DSmP",
@@ -607,6 +643,7 @@ def _one_line(message: str) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
+    _stdin["read"] = False
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
