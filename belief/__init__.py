@@ -9,7 +9,9 @@ The core objects:
 * :func:`combine`: the rules of :data:`RULES`, with closed forms for Bayesian sources
   (:class:`ClosedFormBatch`, :func:`exclusive_split`) and :func:`inconsistency`, R of W (10);
   :func:`get_rule` looks a rule up, :data:`R_MODES` and :data:`EMPTY_MODES` are the options of the
-  R-weighted rule.
+  R-weighted rule;
+* :func:`decide`, :func:`distance`, :func:`conflict` and :func:`uncertainty`: decisions, distances between
+  sources, their conflict, and uncertainty measures in bits.
 
 >>> from belief import Frame, MassFunction
 >>> m = MassFunction({"a": 0.6, "a|b": 0.4}, frame=["a", "b"])
@@ -26,12 +28,16 @@ from belief.errors import (
     FrameError,
     InvalidMassError,
     LatticeTooLargeError,
+    MeasureOptionError,
     ModelError,
+    OutputPathError,
     ParseError,
     ResourceLimitError,
     TotalConflictError,
+    UndefinedMeasureError,
     UndefinedTransformError,
     UnknownHypothesisError,
+    UnknownMeasureError,
 )
 from belief.frame import Element, Frame
 from belief.lattice import HyperPowerSet, hyper_power_set
@@ -42,6 +48,25 @@ from belief.rules import (EMPTY_MODES, ENGINES, R_MODES, RULES, UnknownRuleError
 from belief import extra_rules, representations  # importing extra_rules registers its rules in RULES
 
 __version__ = "0.1.0"
+
+#: The everyday functions of other modules, imported on first use so that ``import belief`` stays quick.
+_LAZY = {"decide": "belief.decisions", "distance": "belief.distances", "conflict": "belief.distances",
+         "uncertainty": "belief.uncertainty"}
+
+
+def __getattr__(name: str):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'belief' has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
 
 __all__ = [
     "BeliefError",
@@ -56,6 +81,10 @@ __all__ = [
     "HyperPowerSet",
     "InvalidMassError",
     "LatticeTooLargeError",
+    "MeasureOptionError",
+    "OutputPathError",
+    "UndefinedMeasureError",
+    "UnknownMeasureError",
     "MassBatch",
     "MassFunction",
     "Model",
@@ -69,6 +98,10 @@ __all__ = [
     "RULES",
     "R_MODES",
     "combine",
+    "decide",
+    "distance",
+    "conflict",
+    "uncertainty",
     "exclusive_split",
     "get_rule",
     "inconsistency",

@@ -521,11 +521,18 @@ class MassFunction(_MassSlots):
         """DSm cardinality C_M(A) under this mass function's model."""
         return self.model.cardinality(element)
 
-    def betp(self, query: Query) -> float:
-        """Generalised pignistic probability BetP(A) = Σ_X m(X) C_M(X∩A)/C_M(X).
+    def betp(self, query: Query | None = None):
+        """Generalised pignistic probability BetP(A) = Σ_X m(X) C_M(X∩A)/C_M(X); without a query, of every hypothesis.
 
-        m(∅) is removed and the rest rescaled by 1 - m(∅).
+        m(∅) is removed and the rest rescaled by 1 - m(∅).  ``m.betp()`` is :meth:`pignistic`,
+        ``{name: probability}``.
+
+        >>> m = MassFunction({"a": 0.5, "a|b": 0.5}, model=Model.shafer(Frame(["a", "b"])))
+        >>> m.betp("a"), m.betp()
+        (0.75, {'a': 0.75, 'b': 0.25})
         """
+        if query is None:
+            return self.pignistic()
         check_cardinality_range(self, "BetP")
         return self._one("betp", query)
 

@@ -33,6 +33,7 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
+from .defaults import AUTOMATIC_WARM_UP
 from .extras import require
 
 __all__ = ["register", "register_eval", "register_experiment", "AUTOMATIC_WARM_UP", "parse_setting"]
@@ -42,8 +43,6 @@ SCORES_EXPLAINED = ("(MOTA: 1 minus the missed people, false boxes and identity 
                     "IDF1: the share of boxes on the right person with the right id; 1 is perfect for both, a box "
                     "counts when it overlaps its person by IoU >= 0.5)")
 
-#: Frames the background model learns from before an automatic run (``--warm-up``).
-AUTOMATIC_WARM_UP = 50
 
 
 def _cues(text: str) -> tuple[str, ...]:

@@ -88,6 +88,7 @@ from typing import Any
 
 import numpy as np
 
+from .defaults import AUTOMATIC_WARM_UP
 from .errors import TrackingError
 from .extras import require
 from .limits import regular_file
@@ -121,8 +122,6 @@ _PATH_KEYS = ("video", "gt", "detections")
 _TOP_KEYS = ("name", "seeds", "tracker", "sequences", "methods", "grid")
 _GRID_KEYS = ("rules", "fusions", "cues")
 _INITS = ("gt", "automatic")
-#: Frames the background model learns from before an automatic run (as ``belief track``).
-AUTOMATIC_WARM_UP = 50
 
 #: The most runs (sequences x methods x seeds) an experiment may have.  Each run tracks a whole
 #: sequence, so a larger grid would take years; the product is counted from the lengths of the

@@ -12,6 +12,7 @@ never touches a file.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
 from collections.abc import Callable
@@ -22,10 +23,11 @@ import numpy as np
 
 from . import limits, outputs
 from .config import TrackerConfig
+from .defaults import AUTOMATIC_WARM_UP
 from .detections import Detections, check_detections
 from .errors import DetectionFileError, InitError, TrackingError
 from .extras import require
-from .initiation import InitPlan
+from .initiation import InitiationConfig, InitPlan
 from .motfiles import check_ground_truth, read_mot
 from .outdir import OutputFolder, input_paths
 from .sources import FrameSource, open_source
@@ -122,7 +124,10 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(),
     init : InitPlan or None
         Births and deaths of the targets (:func:`~belief_tracking.initiation.init_from_gt`,
         :func:`~belief_tracking.initiation.read_init_boxes`); None leaves them all to
-        the automatic initiation (``config.initiation``).
+        the automatic initiation: ``config.initiation``, or where it is None, as on the
+        command line, its defaults with tracks born on the first frame too and a background
+        learnt from :data:`~belief_tracking.defaults.AUTOMATIC_WARM_UP` frames (unless
+        ``config.warm_up`` is set).
     config : TrackerConfig
         With ``config.warm_up`` > 0 the background model first learns from that many frames
         spread over the whole source (a video file is then decoded twice).
@@ -181,6 +186,10 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(),
     for package in ("tqdm", "cv2"):
         require(package)  # a missing extra is one line, before any input is read or any file written
     _check_arguments(seed, init, config, detections)
+    if init is None and config.initiation is None:
+        # As on the command line: without births and deaths given, the tracker finds the people itself.
+        config = dataclasses.replace(config, initiation=InitiationConfig(first_frame=True),
+                                     warm_up=config.warm_up or AUTOMATIC_WARM_UP)
     started = time.perf_counter()
     names = output_names(write_video, write_plot, tuple(extra_outputs or ()))
     staged = _output_folder(out_dir, names, input_paths(source, gt), force)
@@ -251,8 +260,6 @@ def _check_arguments(seed, init, config, detections) -> None:
         raise TrackingError(f"init must be an InitPlan or None, got {type(init).__name__}")
     if not isinstance(config, TrackerConfig):
         raise TrackingError(f"config must be a TrackerConfig, got {type(config).__name__}")
-    if init is None and config.initiation is None:
-        raise InitError("nothing to track: give an init plan or turn on the automatic initiation")
     if detections is not None and not isinstance(detections, Detections):
         raise TrackingError(f"detections must be Detections or None, got {type(detections).__name__}")
 
