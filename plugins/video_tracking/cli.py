@@ -188,7 +188,7 @@ def _track(args: argparse.Namespace) -> int:
     from .config import TrackerConfig
 
     _output_dir(args.out)
-    config = TrackerConfig.from_settings(_settings(args), "belief track")
+    config = TrackerConfig.from_settings(_settings(args), "the tracker's settings")
     if args.demo:
         _demo_arguments(args)
     out = _track_output(args)
@@ -395,8 +395,8 @@ def _cmd_eval(args: argparse.Namespace) -> int:
     from .motfiles import read_mot
 
     # A run that found nobody writes an empty tracks.txt: it scores as missing every box.
-    tracks = read_mot(args.tracks, allow_empty=True)
-    gt = read_mot(args.gt)
+    tracks = read_mot(args.tracks, allow_empty=True, what="tracks file")
+    gt = read_mot(args.gt, what="ground-truth file")
     scores = evaluate(gt, tracks)
     if args.json:
         print(json.dumps(scores.to_dict(), indent=2))

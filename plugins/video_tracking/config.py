@@ -39,6 +39,8 @@ DIAGNOSTICS = ("strategy", "all")
 #: 100 particles a frame of 320 x 240 takes about 1.5 s at 100 targets, 5 s at 200 and
 #: (cubically) minutes at 500.
 MAX_TARGETS = 100
+#: Other spellings of cue names, read as the cue's own name.
+CUE_SPELLINGS = {"color": "colour"}
 
 #: The largest :attr:`TrackerConfig.max_targets` accepted at all (the memory estimate bounds it further).
 MAX_TARGETS_BOUND = 100_000
@@ -175,6 +177,8 @@ class TrackerConfig:
         for name in cues:
             if not isinstance(name, str):
                 raise TrackingError(f"TrackerConfig.cues must be a list of cue names, got {shown(name)} in it")
+        cues = tuple(CUE_SPELLINGS.get(name, name) for name in cues)
+        for name in cues:
             if name not in CUES:
                 raise UnknownCueError(f"unknown cue {shown(name)}; known cues: {', '.join(CUES)}")
         if len(set(cues)) != len(cues):

@@ -456,7 +456,7 @@ def _repeated_id(name: str) -> Callable[[np.ndarray, np.ndarray], TrackFileError
     return repeats
 
 
-def read_mot(path: str | PathLike[str], *, allow_empty: bool = False) -> np.ndarray:
+def read_mot(path: str | PathLike[str], *, allow_empty: bool = False, what: str = "track file") -> np.ndarray:
     """Read a MOTChallenge track or ground-truth file.
 
     Each non-blank line is ``frame,id,x,y,w,h[,flag[,a[,b[,c]]]]``: 6 to 10 numbers
@@ -472,6 +472,8 @@ def read_mot(path: str | PathLike[str], *, allow_empty: bool = False) -> np.ndar
     allow_empty : bool, default False
         Accept a file without any box (tracks of a run that found nobody) and return no
         rows; a ground truth without boxes stays an error.
+    what : str, default "track file"
+        What the file is, in messages ("ground-truth file", say).
 
     Returns
     -------
@@ -507,7 +509,7 @@ def read_mot(path: str | PathLike[str], *, allow_empty: bool = False) -> np.ndar
     (0, 7)
     """
     name = str(path)
-    text = read_table_text(path, "track file", TrackFileError)
+    text = read_table_text(path, what, TrackFileError)
     rows, _ = _read_table(text, name, _MOT_TABLE, _repeated_id(name))
     if not len(rows) and not allow_empty:
         raise TrackFileError(f"{name}: no boxes in the file (it is empty)")

@@ -406,3 +406,19 @@ def test_the_command_line_announces_a_long_run_on_standard_error(tmp_path, capsy
     assert main(["track", str(video), "--out", str(tmp_path / "o"), "--no-progress", "--no-video"]) == 0
     err = capsys.readouterr().err
     assert "belief track: " in err and "3 frames of 64 x 48" in err and "of memory" in err
+
+
+def test_messages_name_the_file_s_role_and_carry_one_prefix(tmp_path, capsys):
+    tracks = tmp_path / "t.txt"
+    tracks.write_text("1,1,10,10,20,40,1,-1,-1,-1\n", encoding="utf-8")
+    assert main(["eval", str(tracks), str(tmp_path / "missing_gt.txt")]) == 1
+    assert "cannot read ground-truth file" in one_line(capsys)
+    assert main(["eval", str(tmp_path / "missing.txt"), str(tracks)]) == 1
+    assert "cannot read tracks file" in one_line(capsys)
+    assert main(["track", "--demo", "--out", str(tmp_path / "o"), "--cues", "sound", "--no-progress"]) == 1
+    err = one_line(capsys)
+    assert err.count("belief") == 1 and "unknown cue 'sound'" in err
+
+
+def test_the_american_spelling_of_colour_names_the_colour_cue():
+    assert TrackerConfig(cues=("color", "location")).cues == ("colour", "location")
