@@ -10,8 +10,8 @@ The core objects:
   (:class:`ClosedFormBatch`, :func:`exclusive_split`) and :func:`inconsistency`, R of W (10);
   :func:`get_rule` looks a rule up, :data:`R_MODES` and :data:`EMPTY_MODES` are the options of the
   R-weighted rule;
-* :func:`decide`, :func:`distance`, :func:`conflict` and :func:`uncertainty`: decisions, distances between
-  sources, their conflict, and uncertainty measures in bits.
+* :func:`decide`, :func:`distance` and :func:`conflict`: decisions, distances between sources and their
+  conflict (the uncertainty measures are in the module :mod:`belief.uncertainty`, which that name keeps).
 
 >>> from belief import Frame, MassFunction
 >>> m = MassFunction({"a": 0.6, "a|b": 0.4}, frame=["a", "b"])
@@ -50,8 +50,7 @@ from belief import extra_rules, representations  # importing extra_rules registe
 __version__ = "0.1.0"
 
 #: The everyday functions of other modules, imported on first use so that ``import belief`` stays quick.
-_LAZY = {"decide": "belief.decisions", "distance": "belief.distances", "conflict": "belief.distances",
-         "uncertainty": "belief.uncertainty"}
+_LAZY = {"decide": "belief.decisions", "distance": "belief.distances", "conflict": "belief.distances"}
 
 
 def __getattr__(name: str):
@@ -101,7 +100,6 @@ __all__ = [
     "decide",
     "distance",
     "conflict",
-    "uncertainty",
     "exclusive_split",
     "get_rule",
     "inconsistency",

@@ -75,14 +75,15 @@ def test_rules_list_as_json_with_their_properties(capsys):
 
 def test_the_everyday_functions_are_at_the_top_level_and_betp_gives_the_distribution():
     import belief
-    from belief import Frame, MassFunction, Model, conflict, decide, distance, uncertainty
+    import belief.uncertainty
+    from belief import Frame, MassFunction, Model, conflict, decide, distance
     from belief.decisions import decide as decide_itself
 
-    assert decide is decide_itself and {"decide", "distance", "conflict", "uncertainty"} <= set(belief.__all__)
+    assert decide is decide_itself and {"decide", "distance", "conflict"} <= set(belief.__all__)
     assert {"decide", "distance"} <= set(dir(belief))
     m = MassFunction({"a": 0.5, "a|b": 0.5}, model=Model.shafer(Frame(["a", "b"])))
     assert decide(m, "betp").elements == ["a"] and distance(m, m) == 0.0
     assert m.betp() == m.pignistic() == {"a": 0.75, "b": 0.25}
-    assert set(uncertainty(m)) >= {"nonspecificity"} and conflict(m, m) >= 0.0
+    assert set(belief.uncertainty.uncertainty(m)) >= {"nonspecificity"} and conflict(m, m) >= 0.0
     with pytest.raises(AttributeError, match="no attribute 'decidee'"):
         belief.decidee
