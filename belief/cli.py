@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from importlib.metadata import entry_points
 from typing import Any
 
-from belief.errors import BeliefError, CombinationTooLargeError, FormatError, ResourceLimitError
+from belief.errors import BeliefError, FormatError, ResourceLimitError
 from belief.frame import Frame
 from belief.lattice import check_lattice_size, hyper_power_set
 from belief.mass import MassFunction, check_cardinality_range
@@ -281,15 +281,8 @@ def _cmd_combine(args: argparse.Namespace) -> int:
     for k, source in enumerate(sources[1:], start=2):
         if source.model != sources[0].model:
             raise FormatError(f"{args.bba[k - 1]} was elicited under another frame or model than {args.bba[0]}")
-    given = {name: getattr(args, flag.replace("-", "_")) for flag, name in LIMIT_FLAGS.items()}
-    try:
-        with _limits({name: value for name, value in given.items() if value is not None}):
-            result = combine(*sources, rule=info, model=model, **options)
-    except CombinationTooLargeError as exc:
-        # Every limit has its option: the command line's user is told that, not a module attribute.
-        flag = next(f for f, name in LIMIT_FLAGS.items() if name == exc.limit)
-        raise CombinationTooLargeError(str(exc).replace(f"or raise {exc.limit}", f"or raise it with --{flag} N"),
-                                       exc.limit) from None
+    with _option_limits(args, LIMIT_FLAGS):
+        result = combine(*sources, rule=info, model=model, **options)
     _print_mass(result, args.json)
     return 0
 
@@ -306,24 +299,35 @@ TABLE_LIMIT_FLAGS = {"max-table-entries": "belief.batch.MAX_TABLE_ENTRIES",
                      "max-element-entries": "belief.batch.MAX_ELEMENT_ENTRIES"}
 
 
+#: What a measuring command's user does instead of asking for "fewer queries", where that is not the advice.
+_TABLE_ADVICE = {"measures": "ask for fewer queries (--query PROP ...)",
+                 # discord, dissonance and confusion weigh BetP, Pls or Bel of every focal element
+                 "uncertainty": "leave out discord, dissonance and confusion (--measure nonspecificity deng ambiguity)"}
+
+
 def _run_measuring(args: argparse.Namespace) -> int:
     """Run a measuring command with the table limits its options set; a refusal names the option."""
-    given = {name: getattr(args, flag.replace("-", "_")) for flag, name in TABLE_LIMIT_FLAGS.items()}
+    with _option_limits(args, TABLE_LIMIT_FLAGS, {"ask for fewer queries": _TABLE_ADVICE.get(args.command)}):
+        return args.measuring(args)
+
+
+@contextlib.contextmanager
+def _option_limits(args: argparse.Namespace, flags: dict, advice: dict | None = None):
+    """Set the limits that ``flags`` (option -> limit) gave values for the block; a refusal over one of them names
+    its option, not a module attribute, with any ``advice`` (library text -> command-line text) rewritten."""
+    given = {name: getattr(args, flag.replace("-", "_")) for flag, name in flags.items()}
     try:
         with _limits({name: value for name, value in given.items() if value is not None}):
-            return args.measuring(args)
+            yield
     except ResourceLimitError as exc:
-        flag = next((f for f, name in TABLE_LIMIT_FLAGS.items() if name == exc.limit), None)
+        flag = next((f for f, name in flags.items() if name == exc.limit), None)
         if flag is None:
             raise
         message = str(exc).replace(f"or raise {exc.limit}", f"or raise it with --{flag} N")
-        if args.measuring is _cmd_measures:
-            message = message.replace("ask for fewer queries", "ask for fewer queries (--query PROP ...)")
-        elif args.measuring is _cmd_uncertainty:
-            # discord, dissonance and confusion weigh BetP, Pls or Bel of every focal element
-            message = message.replace("ask for fewer queries", "leave out discord, dissonance and confusion "
-                                      "(--measure nonspecificity deng ambiguity)")
-        raise ResourceLimitError(message, exc.limit) from None
+        for library, command_line in (advice or {}).items():
+            if command_line:
+                message = message.replace(library, command_line)
+        raise type(exc)(message, exc.limit) from None
 
 
 def _limit_value(text: str) -> int:

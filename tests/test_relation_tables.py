@@ -191,3 +191,24 @@ def test_jousselme_s_distance_of_many_focal_elements_is_refused_or_fast(monkeypa
         with pytest.raises(ResourceLimitError, match="Jousselme's matrix of 2,001 focal elements"):
             jousselme_distance(m, vacuous)
     assert 0 < jousselme_distance(m, vacuous) < 1
+
+
+def test_each_measuring_command_says_what_avoids_a_table_refusal(tmp_path, capsys):
+    import json
+
+    from belief.cli import main
+
+    names = [f"g{i}" for i in range(8)]              # a frame of this test only: no cached plan
+    masses = {"|".join(names[b] for b in range(8) if k >> b & 1): 1 / 40 for k in range(1, 41)}
+    path = tmp_path / "forty.json"
+    path.write_text(json.dumps({"model": {"type": "shafer"}, "frame": names, "mass": masses}), encoding="utf-8")
+    assert main(["uncertainty", str(path), "--max-table-entries", "1000"]) == 1
+    error = capsys.readouterr().err
+    assert "leave out discord, dissonance and confusion (--measure nonspecificity deng ambiguity) or raise it with " \
+           "--max-table-entries N" in error
+    assert main(["uncertainty", str(path), "--measure", "nonspecificity", "--max-table-entries", "1000"]) == 0
+    capsys.readouterr()
+    assert main(["distance", str(path), str(path), "--max-table-entries", "1000"]) == 1
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "use mass functions of fewer focal elements or raise it with " \
+                                      "--max-table-entries N" in error
