@@ -661,12 +661,14 @@ def _sequence(entry: Any, base: Path, number: int = 1) -> SequenceSpec:
     where = f"sequence {values['name']!r}"
     for key in _PATH_KEYS:
         if key in values:
-            values[key] = _resolve_file(base, values[key], f"{where}: {key}")
+            values[key] = _resolve_file(base, values[key], where, key)
     return SequenceSpec(**values)
 
 
-def _resolve_file(base: Path, text: str, what: str) -> str:
-    """The absolute path of an existing regular file named by ``text`` (relative to ``base``)."""
+def _resolve_file(base: Path, text: str, where: str, key: str) -> str:
+    """The absolute path of an existing regular file named by ``text`` (relative to ``base``), the ``key`` of
+    ``where`` (a sequence)."""
+    what = f"{where}: {key}"
     if not text.strip() or "\0" in text:
         raise ExperimentError(f"{what} must be the path of a file, got {_shown(text)!r}")
     try:
@@ -674,11 +676,10 @@ def _resolve_file(base: Path, text: str, what: str) -> str:
     except (OSError, RuntimeError, ValueError) as exc:  # a name too long, a symlink loop
         raise ExperimentError(f"{what}: not a usable path {_shown(text)!r} "
                               f"({getattr(exc, 'strerror', None) or exc})") from None
-    where, _, key = what.rpartition(": ")
     try:
         regular_file(resolved, f"{key} file", ExperimentError)
     except ExperimentError as exc:
-        raise ExperimentError(f"{where}: {exc}" if where else str(exc)) from None
+        raise ExperimentError(f"{where}: {exc}") from None
     return str(resolved)
 
 

@@ -138,8 +138,8 @@ class ExperimentPlan:
         >>> ExperimentPlan(8, 3.0, 20.0, 10.0, 200 << 20, 400 << 20, 2).describe()
         'estimated 20 s of computing (10 s on 2 workers), up to 3 s and 200 MB per run, 400 MB at once'
         """
-        return (f"estimated {_duration(self.total_seconds)} of computing ({_duration(self.wall_seconds)} on "
-                f"{self.workers} worker{'s' if self.workers != 1 else ''}), up to {_duration(self.run_seconds)} "
+        return (f"estimated {limits.duration(self.total_seconds)} of computing ({limits.duration(self.wall_seconds)} on "
+                f"{self.workers} worker{'s' if self.workers != 1 else ''}), up to {limits.duration(self.run_seconds)} "
                 f"and {_megabytes(self.run_bytes)} per run, {_megabytes(self.peak_bytes)} at once")
 
 
@@ -191,7 +191,7 @@ def plan_experiment(experiment: Experiment, *, workers: int | None = None) -> Ex
             label = f"{sequence.name}/{method.name}"
             if seconds > MAX_RUN_SECONDS:
                 raise ExperimentError(
-                    f"a run of {label} is estimated at {_duration(seconds)} ({frames} frames of {pixels:,} pixels, "
+                    f"a run of {label} is estimated at {limits.duration(seconds)} ({frames} frames of {pixels:,} pixels, "
                     f"{config.particles:,} particles x {targets} targets), more than "
                     f"belief_tracking.grid.MAX_RUN_SECONDS = {MAX_RUN_SECONDS:g}; use fewer particles or frames, "
                     f"or raise the limit with --max-run-seconds N")
@@ -284,7 +284,6 @@ def _sequence_size(sequence: SequenceSpec) -> tuple[int, int, int, int, int]:
     return max(frames, 1), width, height, held, targets
 
 
-_duration = limits.duration
 
 
 def _megabytes(count: int) -> str:

@@ -360,11 +360,12 @@ def duration(seconds: float) -> str:
     return f"{seconds / 86400:.1f} days"
 
 
-def long_run_notice(config, source, targets: int | None) -> str | None:
+def long_run_notice(config, source, targets: int | None, memory: MemoryEstimate | None = None) -> str | None:
     """One line stating a run's estimated time and memory, when it is estimated over :data:`LONG_RUN_SECONDS`.
 
     ``targets`` is the most tracked at once when known (an init plan); otherwise the line gives
-    the time of one target and of ``config.max_targets`` at once.
+    the time of one target and of ``config.max_targets`` at once.  ``memory`` is the run's
+    estimate where :func:`check_run` has made it already.
     """
     if not source.count:
         return None
@@ -372,14 +373,16 @@ def long_run_notice(config, source, targets: int | None) -> str | None:
     low = estimate_seconds(config, source.width, source.height, source.count, targets or 1)
     if low < LONG_RUN_SECONDS:
         return None
-    memory = _bytes(estimate_memory(config, source.width, source.height, targets, source.count).total)
+    if memory is None:
+        memory = estimate_memory(config, source.width, source.height, targets, source.count)
+    total = _bytes(memory.total)
     if targets is None:
         high = estimate_seconds(config, source.width, source.height, source.count)
         time = (f"about {duration(low)} with one target, {duration(high)} with {config.max_targets:,} at once "
                 "(max_targets)")
     else:
         time = f"about {duration(low)} with {targets:,} targets at once"
-    return f"{source.name}: {size} with {config.particles:,} particles a target: {time}, up to {memory} of memory"
+    return f"{source.name}: {size} with {config.particles:,} particles a target: {time}, up to {total} of memory"
 
 
 def _refuse_memory(estimate: MemoryEstimate, where: str, config) -> None:

@@ -203,8 +203,8 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(),
         if gt_rows is not None:
             check_ground_truth(gt_rows, frames.count, str(gt) if isinstance(gt, (str, PathLike)) else "the ground truth")
         _check_fit(frames, init, detections)
-        limits.check_run(config, frames, init)
-        notice = limits.long_run_notice(config, frames, limits.run_targets(config, init))
+        memory = limits.check_run(config, frames, init)
+        notice = limits.long_run_notice(config, frames, limits.run_targets(config, init), memory)
         if notice is not None and announce is not None:
             announce(notice)
         tracker = start_tracker(config, init, seed, frames)
