@@ -132,10 +132,18 @@ def test_weighted_sums_add_term_by_term_whichever_loop_runs(rows, k, q, data):
     weight = st.sampled_from([0.0, 0.0, 1.0, 0.5, 1 / 3, 2.0, 1e-300])
     values = np.array(data.draw(st.lists(floats, min_size=rows * k, max_size=rows * k))).reshape(rows, k)
     table = np.array(data.draw(st.lists(weight, min_size=k * q, max_size=k * q))).reshape(k, q)
-    np.testing.assert_array_equal(weighted_sum(values, table), sequential_sums(values, table))
-    # One row and a full table take the loop over focal elements; many rows the loop over entries.
-    wide = np.vstack([values] * 700)
-    np.testing.assert_array_equal(weighted_sum(wide, table)[:rows], sequential_sums(values, table))
+    import belief.plan
+
+    expected = sequential_sums(values, table)
+    # A step costing nothing picks the loop over entries; a costly one the loop over focal elements
+    # (where the table has more entries than focal elements): both give the literal sums.
+    for step_cost in (0, 10**12, belief.plan._STEP_COST):
+        saved = belief.plan._STEP_COST
+        belief.plan._STEP_COST = step_cost
+        try:
+            np.testing.assert_array_equal(weighted_sum(values, table), expected, err_msg=f"step cost {step_cost}")
+        finally:
+            belief.plan._STEP_COST = saved
 
 
 def test_the_command_line_names_the_option_that_raises_a_table_limit(tmp_path, capsys):
