@@ -145,6 +145,9 @@ TERMINATED_STATUS = 128 + 15
 class _Terminated(KeyboardInterrupt):
     """SIGTERM, raised in the main thread as an interruption, so that a run deletes its staged files."""
 
+    #: True when the signal came after the run had put all its files in place (only the report was left).
+    files_complete = False
+
 
 @contextlib.contextmanager
 def _sigterm_interrupts() -> Iterator[None]:
@@ -179,8 +182,12 @@ def _cmd_track(args: argparse.Namespace) -> int:
     try:
         with _sigterm_interrupts(), limits.applied(limits.given(args)):
             return _track(args)
-    except _Terminated:
-        print(f"belief: terminated (SIGTERM); nothing of this run was left in {args.out}", file=sys.stderr)
+    except _Terminated as stop:
+        if stop.files_complete:
+            print(f"belief: terminated (SIGTERM) after the run had written all its files to {args.out}",
+                  file=sys.stderr)
+        else:
+            print(f"belief: terminated (SIGTERM); nothing of this run was left in {args.out}", file=sys.stderr)
         return TERMINATED_STATUS
 
 
@@ -194,10 +201,12 @@ def _track(args: argparse.Namespace) -> int:
     out = _track_output(args)
     try:
         summary = _track_demo(args, config, out) if args.demo else _track_source(args, config, out)
-    except BaseException:
+        _report(args, summary)
+    except BaseException as exc:
         out.abort()
+        if isinstance(exc, _Terminated):
+            exc.files_complete = out.committed
         raise
-    _report(args, summary)
     return 0
 
 

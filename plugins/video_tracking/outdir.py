@@ -27,10 +27,12 @@ import hashlib
 import json
 import os
 import re
+import contextlib
 import secrets
+import signal
 import stat
 import tempfile
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -102,6 +104,7 @@ class OutputFolder:
         self.names = tuple(_plain_name(name) for name in names)
         self.force = bool(force)
         self._staged: dict[str, Path] = {}
+        self.committed = False
         self._check_inputs(inputs)
         exists = self._check_path()
         self._earlier = self._check_contents() if exists else {}
@@ -213,11 +216,13 @@ class OutputFolder:
     def path(self, name: str) -> Path:
         """A new, empty, regular file under which the file ``name`` is written (same suffix), until :meth:`commit`."""
         final = Path(_plain_name(name))
-        try:
-            staged = _new_file(self.out_dir, f".{final.stem}.partial", final.suffix)
-        except OSError as exc:
-            raise self._refuse(f"cannot write {name}: {_reason(exc)}") from None
-        self._staged[name] = staged
+        # Held so that an interruption cannot fall between making the file and recording it for abort().
+        with _interruptions_held():
+            try:
+                staged = _new_file(self.out_dir, f".{final.stem}.partial", final.suffix)
+            except OSError as exc:
+                raise self._refuse(f"cannot write {name}: {_reason(exc)}") from None
+            self._staged[name] = staged
         return staged
 
     def commit(self) -> dict[str, Path]:
@@ -225,8 +230,13 @@ class OutputFolder:
 
         The files of an earlier run that this one did not write are removed, and so is an
         earlier ``summary.json`` before the others are renamed, so that no summary describes a
-        mix of two runs even for a moment.
+        mix of two runs even for a moment. Ctrl-C and SIGTERM wait until the commit is over, so
+        that a run is either all staged (and :meth:`abort` removes it) or all in place.
         """
+        with _interruptions_held():
+            return self._commit()
+
+    def _commit(self) -> dict[str, Path]:
         written = {name: staged for name, staged in self._staged.items() if staged.exists()}
         records = {name: _record(staged) for name, staged in written.items()}
         # Listed before the renames with the files they replace: a run killed halfway leaves
@@ -250,6 +260,7 @@ class OutputFolder:
         self._staged.clear()
         self._write_manifest({name: [record] for name, record in records.items()})
         self._created_dirs.clear()
+        self.committed = True
         return final
 
     def abort(self) -> None:
@@ -323,6 +334,37 @@ def check_folder(path: str | PathLike[str], inputs: Iterable[str | PathLike[str]
     if gate._check_path() or create:
         gate._create()  # an existing folder is only tried: a file is made in it and removed
     return gate.out_dir
+
+
+#: The signals that end a run early, held back while the output folder is between two states.
+_INTERRUPTIONS = {signal.SIGINT, getattr(signal, "SIGTERM", signal.SIGINT)}
+
+
+@contextlib.contextmanager
+def _interruptions_held() -> Iterator[None]:
+    """Delay Ctrl-C and SIGTERM until the block is over, then deliver them as they would have been.
+
+    A handler that only remembers the signal stands in for the block: masking the signal would not
+    do, since the kernel hands a process's signal to any thread that leaves it unmasked (numpy's
+    BLAS threads among them). Outside the main thread Python runs no handler here, so nothing is held.
+    """
+    pending: list[int] = []
+
+    def remember(signum, frame):
+        pending.append(signum)
+
+    try:
+        previous = {number: signal.signal(number, remember) for number in _INTERRUPTIONS}
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, signal.SIG_DFL if handler is None else handler)
+        for number in dict.fromkeys(pending):
+            signal.raise_signal(number)
 
 
 def _new_file(folder: Path, stem: str, suffix: str) -> Path:
