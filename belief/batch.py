@@ -48,10 +48,10 @@ def resolve_model(frame=None, model=None) -> Model:
     if frame is None:
         raise FrameError("give the frame (frame=Frame([...]) or a list of names) or a model")
     frame = _as_frame(frame)
-    if model is None or model == "free":
-        return Model.free(frame)
-    if model == "shafer":
+    if model is None or model == "shafer":
         return Model.shafer(frame)
+    if model == "free":
+        return Model.free(frame)
     if isinstance(model, str):
         raise FrameError(f"model must be a Model, 'free' or 'shafer', got {model!r}")
     raise TypeError(f"model must be a Model, got {type(model).__name__}")
@@ -376,7 +376,7 @@ class MassBatch:
            [0.4, 0.9]])
     >>> batch.betp("a")
     array([0.65, 0.25])
-    >>> MassBatch(["a", "b", "a|b"], rows, frame=["a", "b"]).pls("a")  # free model: a∩b ≠ ∅
+    >>> MassBatch(["a", "b", "a|b"], rows, frame=["a", "b"], model="free").pls("a")  # a∩b ≠ ∅
     array([1., 1.])
     """
 

@@ -72,7 +72,7 @@ def run_demo(out: TextIO) -> None:
     frame = Frame(["a", "b"])
     sizes = ", ".join(f"n={n}: {len(hyper_power_set(n))}" for n in range(1, 6))
     out.write(f"  |D^Θ| on the free model (∅ included): {sizes}\n")
-    free = MassFunction({"a": 0.4, "b": 0.2, "a&b": 0.3, "a|b": 0.1}, frame=frame)
+    free = MassFunction({"a": 0.4, "b": 0.2, "a&b": 0.3, "a|b": 0.1}, frame=frame, model="free")
     _rows(out, "Evidence under the free DSm model", free, ["a", "b", "a&b"])
     exclusive = Model.hybrid(frame, empty=["a&b"])
     later = free.under(exclusive)

@@ -314,8 +314,11 @@ def distance(m1: Source, m2: Source, kind: str = "jousselme"):
     >>> from belief import Frame, MassFunction
     >>> m1 = MassFunction({"a": 1.0}, frame=["a", "b"])
     >>> m2 = MassFunction({"b": 1.0}, frame=["a", "b"])
-    >>> round(distance(m1, m2), 6), distance(m1, m2, kind="euclidean")   # free model: D_ab = 1/3
-    (0.816497, 1.0)
+    >>> distance(m1, m2), distance(m1, m2, kind="euclidean")   # Shafer's model: a and b disjoint
+    (1.0, 1.0)
+    >>> free = [MassFunction(m, frame=["a", "b"], model="free") for m in ({"a": 1.0}, {"b": 1.0})]
+    >>> round(distance(*free), 6)   # the free model: a and b share a∩b, D_ab = 1/3
+    0.816497
     >>> distance(m1, m2, kind="hamming")
     Traceback (most recent call last):
     ...

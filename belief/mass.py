@@ -53,8 +53,10 @@ class MassFunction(_MassSlots):
         and ``"b|a"``) have their masses added.
     frame : Frame or sequence of str, optional
         The frame; may be omitted when ``model`` is a :class:`~belief.model.Model`.
-    model : Model or {"free", "shafer"}, optional
-        The model the evidence was elicited under; the free DSm model by default.
+    model : Model or {"shafer", "free"}, optional
+        The model the evidence was elicited under: Shafer's model (exclusive, exhaustive
+        hypotheses, as in Dempster–Shafer theory) by default; ``"free"`` for the free DSm
+        model, where hypotheses may overlap, or a :class:`~belief.model.Model` (hybrid, tracking).
     subnormal : bool
         Allow mass on ∅ or on elements that are empty under the model (open world, as
         in the transferable belief model); such mass is kept on ∅.
@@ -70,12 +72,13 @@ class MassFunction(_MassSlots):
     >>> m = MassFunction({"a": 0.6, "a|b": 0.4}, frame=["a", "b"])
     >>> m
     MassFunction({'a': 0.6, 'a|b': 0.4}, frame=['a', 'b'])
-    >>> m.bel("a"), m.pls("b"), m.q("a")  # on the free model a∩b ≠ ∅, so Pls(b) = 1
-    (0.6, 1.0, 1.0)
-    >>> m.betp("a")  # a|b has 3 regions on the free model, a&b counts for a and for b
+    >>> m.bel("a"), m.pls("b"), m.betp("a")  # Shafer's model: a and b exclude each other
+    (0.6, 0.4, 0.8)
+    >>> free = MassFunction({"a": 0.6, "a|b": 0.4}, frame=["a", "b"], model="free")
+    >>> free.pls("b")  # on the free model a∩b ≠ ∅, so a's mass is plausible for b too
+    1.0
+    >>> free.betp("a")  # a|b has 3 regions on the free model, a&b counts for a and for b
     0.8666666666666667
-    >>> m.under(Model.shafer(m.frame)).betp("a")
-    0.8
     """
 
     __slots__ = ()
@@ -386,8 +389,10 @@ class MassFunction(_MassSlots):
     def categorical(cls, element: Query, frame=None, model=None) -> "MassFunction":
         """All the mass on one element.
 
-        >>> MassFunction.categorical("a&b", frame=["a", "b"])
-        MassFunction({'a&b': 1.0}, frame=['a', 'b'])
+        >>> MassFunction.categorical("a", frame=["a", "b"])
+        MassFunction({'a': 1.0}, frame=['a', 'b'])
+        >>> MassFunction.categorical("a&b", frame=["a", "b"], model="free")
+        MassFunction({'a&b': 1.0}, frame=['a', 'b'], model='free')
         """
         model = resolve_model(frame, model)
         target = model.frame.element(element)
@@ -470,8 +475,13 @@ class MassFunction(_MassSlots):
 
     def __repr__(self) -> str:
         body = ", ".join(f"{str(e)!r}: {v!r}" for e, v in zip(self.focal, self.values.tolist()))
-        where = (f"frame={list(self.frame.hypotheses)!r}" if self.model.kind == "free" and not self.model.forbidden
-                 else f"model={self.model!r}")
+        frame = f"frame={list(self.frame.hypotheses)!r}"
+        if self.model == Model.shafer(self.frame):
+            where = frame
+        elif self.model.kind == "free" and not self.model.forbidden:
+            where = f"{frame}, model='free'"
+        else:
+            where = f"model={self.model!r}"
         return f"MassFunction({{{body}}}, {where})"
 
     @property
@@ -579,9 +589,9 @@ class MassFunction(_MassSlots):
 
         >>> m = MassFunction({"a": 0.5, "b": 0.3, "a|b": 0.2}, model="shafer", frame=["a", "b"])
         >>> m.condition("a")
-        MassFunction({'a': 1.0}, model=Model.shafer(Frame(['a', 'b'])))
+        MassFunction({'a': 1.0}, frame=['a', 'b'])
         >>> m.condition("a", normalized=False)
-        MassFunction({'empty': 0.3, 'a': 0.7}, model=Model.shafer(Frame(['a', 'b'])))
+        MassFunction({'empty': 0.3, 'a': 0.7}, frame=['a', 'b'])
         """
         return self._from_row(self.batch().condition(given, normalized=normalized))
 
@@ -595,9 +605,9 @@ class MassFunction(_MassSlots):
         Focal elements are reduced under ``model``; the mass of those that become empty
         moves to ∅, so the result may be subnormal.
 
-        >>> m = MassFunction({"a&b": 0.3, "a": 0.7}, frame=["a", "b"])
+        >>> m = MassFunction({"a&b": 0.3, "a": 0.7}, frame=["a", "b"], model="free")
         >>> m.under(Model.shafer(m.frame))
-        MassFunction({'empty': 0.3, 'a': 0.7}, model=Model.shafer(Frame(['a', 'b'])))
+        MassFunction({'empty': 0.3, 'a': 0.7}, frame=['a', 'b'])
         """
         return self._from_row(self.batch().under(model))
 

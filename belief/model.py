@@ -330,7 +330,10 @@ class Model:
 
     @classmethod
     def from_dict(cls, frame: Frame, data: Any) -> "Model":
-        """Inverse of :meth:`to_dict`; ``None`` gives the free model.
+        """Inverse of :meth:`to_dict`; ``None`` (no model given) gives Shafer's model.
+
+        An object without ``"type"`` is Shafer's model too, or a hybrid model when it lists
+        ``"empty"`` propositions; the free DSm model is asked for by name, ``{"type": "free"}``.
 
         Every type accepts ``"empty"``: the listed propositions are constrained to be empty
         on top of the type's own constraints.  ``free`` with ``empty`` is a hybrid model,
@@ -347,10 +350,10 @@ class Model:
         (True, True, False)
         """
         if data is None:
-            return cls.free(frame)
+            return cls.shafer(frame)
         if not isinstance(data, Mapping):
             raise FormatError(f"a model must be a JSON object with a \"type\", got {_show.repr(data)}")
-        kind = data.get("type", "free" if "empty" not in data else "hybrid")
+        kind = data.get("type", "shafer" if "empty" not in data else "hybrid")
         if not isinstance(kind, str):
             raise FormatError(f"a model's \"type\" must be a string, one of {', '.join(_KINDS)}; "
                               f"got {_show.repr(kind)}")

@@ -335,7 +335,7 @@ def from_mass_vector(values, model) -> Source:
     Examples
     --------
     >>> from_mass_vector([0.0, 0.2, 0.0, 0.8], ["a", "b"])
-    MassFunction({'a': 0.2, 'a|b': 0.8}, model=Model.shafer(Frame(['a', 'b'])))
+    MassFunction({'a': 0.2, 'a|b': 0.8}, frame=['a', 'b'])
     """
     model = _model_of(model)
     n = _require_shafer(model, "from_mass_vector")
@@ -397,7 +397,7 @@ def from_implicability(b, model) -> Source:
     Examples
     --------
     >>> from_implicability([0.0, 0.3, 0.0, 1.0], ["a", "b"])
-    MassFunction({'a': 0.3, 'a|b': 0.7}, model=Model.shafer(Frame(['a', 'b'])))
+    MassFunction({'a': 0.3, 'a|b': 0.7}, frame=['a', 'b'])
     """
     model = _model_of(model)
     n = _require_shafer(model, "from_implicability")
@@ -455,7 +455,7 @@ def from_commonality(q, model) -> Source:
     Examples
     --------
     >>> from_commonality([1.0, 1.0, 0.4, 0.4], ["a", "b"])
-    MassFunction({'a': 0.6, 'a|b': 0.4}, model=Model.shafer(Frame(['a', 'b'])))
+    MassFunction({'a': 0.6, 'a|b': 0.4}, frame=['a', 'b'])
     """
     model = _model_of(model)
     n = _require_shafer(model, "from_commonality")

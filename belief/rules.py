@@ -146,7 +146,7 @@ def combine(*sources: Source, rule: Union[str, RuleInfo] = "dempster", model: Mo
     >>> m1 = MassFunction({"a": 0.9, "c": 0.1}, model=shafer)
     >>> m2 = MassFunction({"b": 0.9, "c": 0.1}, model=shafer)
     >>> combine(m1, m2, rule="dempster")   # Zadeh's example
-    MassFunction({'c': 1.0}, model=Model.shafer(Frame(['a', 'b', 'c'])))
+    MassFunction({'c': 1.0}, frame=['a', 'b', 'c'])
     >>> {e: round(v, 12) for e, v in combine(m1, m2, rule="pcr6").to_mapping().items()}
     {'a': 0.486, 'b': 0.486, 'c': 0.028}
     >>> from belief import MassBatch

@@ -238,7 +238,7 @@ def combine_singletons(kind: str, sources: Sequence[SingletonSource], model: Mod
     >>> m1 = _read(MassFunction({"a": 0.9, "c": 0.1}, model=shafer))
     >>> m2 = _read(MassFunction({"b": 0.9, "c": 0.1}, model=shafer))
     >>> combine_singletons("dempster", [m1, m2], shafer)
-    MassFunction({'c': 1.0}, model=Model.shafer(Frame(['a', 'b', 'c'])))
+    MassFunction({'c': 1.0}, frame=['a', 'b', 'c'])
     >>> {e: round(v, 12) for e, v in combine_singletons("pcr", [m1, m2], shafer).to_mapping().items()}
     {'a': 0.486, 'b': 0.486, 'c': 0.028}
     >>> combine_singletons("meet", [m1, m2], shafer).to_mapping()

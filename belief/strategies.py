@@ -88,7 +88,7 @@ def simplest(strategy: SearchStrategy, condition: Callable[[Any], bool] | None =
     --------
     >>> from belief import Frame, Model
     >>> simplest(mass_functions(Model.shafer(Frame(["a", "b"]))), lambda m: m.bel("a") < 1)
-    MassFunction({'b': 1.0}, model=Model.shafer(Frame(['a', 'b'])))
+    MassFunction({'b': 1.0}, frame=['a', 'b'])
     """
     quick = hypothesis.settings(database=None, phases=[hypothesis.Phase.generate, hypothesis.Phase.shrink])
     return hypothesis.find(strategy, condition if condition is not None else lambda value: True, settings=quick)
@@ -261,12 +261,12 @@ def mass_functions(model: ModelLike = None, *, max_focal: int = 4, subnormal: bo
     >>> from belief import Frame, Model
     >>> shafer = Model.shafer(Frame(["a", "b", "c"]))
     >>> simplest(mass_functions(shafer))
-    MassFunction({'a': 1.0}, model=Model.shafer(Frame(['a', 'b', 'c'])))
+    MassFunction({'a': 1.0}, frame=['a', 'b', 'c'])
     >>> simplest(mass_functions(shafer), lambda m: m.bel("a") < 1)
-    MassFunction({'b': 1.0}, model=Model.shafer(Frame(['a', 'b', 'c'])))
+    MassFunction({'b': 1.0}, frame=['a', 'b', 'c'])
     >>> simplest(mass_functions(shafer, subnormal=True, nondogmatic=True))
     MassFunction({'empty': 0.3333333333333333, 'a': 0.3333333333333333, 'a|b|c': 0.3333333333333333}, \
-model=Model.shafer(Frame(['a', 'b', 'c'])))
+frame=['a', 'b', 'c'])
     """
     check_positive("max_focal", max_focal)
     check_positive("max_weight", max_weight)

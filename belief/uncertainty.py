@@ -128,7 +128,7 @@ def nonspecificity(m: Source):
     >>> shafer = Model.shafer(Frame(["a", "b", "c", "d"]))
     >>> nonspecificity(MassFunction({"a|b": 0.5, "a|b|c|d": 0.5}, model=shafer))   # 0.5 · 1 + 0.5 · 2
     1.5
-    >>> round(nonspecificity(MassFunction({"a|b": 1.0}, frame=["a", "b"])), 6)   # free model: 3 regions
+    >>> round(nonspecificity(MassFunction({"a|b": 1.0}, frame=["a", "b"], model="free")), 6)   # 3 regions
     1.584963
     """
     batch, single, cards = _prepare(m, "the nonspecificity")
@@ -392,7 +392,7 @@ def uncertainty(m: Source, measures: Sequence[str] | None = None) -> dict:
     discord        0.3533
     dissonance     0.0971
     confusion      0.8533
-    >>> free = MassFunction({"A|B": 1.0}, frame=["A", "B"])      # the free model: D^Θ is no power set
+    >>> free = MassFunction({"A|B": 1.0}, frame=["A", "B"], model="free")   # D^Θ is no power set
     >>> list(uncertainty(free))
     ['nonspecificity', 'discord', 'dissonance', 'confusion']
     >>> uncertainty(free, ["deng"])   # doctest: +ELLIPSIS

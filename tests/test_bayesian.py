@@ -674,8 +674,9 @@ def test_bayesian_constructor():
     batch = MassBatch.bayesian([0.6, 0.3, 0.1], model=model)
     assert batch.shape == (1, 3) and batch.focal == model.frame.singletons
     assert MassBatch.bayesian([[0.6, 0.3, 0.1]], model=model).focal is batch.focal          # cached
-    free = MassBatch.bayesian([[0.5, 0.5]], frame=["a", "b"])
-    assert free.model == Model.free(Frame(["a", "b"]))
+    default = MassBatch.bayesian([[0.5, 0.5]], frame=["a", "b"])
+    assert default.model == Model.shafer(Frame(["a", "b"]))
+    assert MassBatch.bayesian([[0.5, 0.5]], frame=["a", "b"], model="free").model == Model.free(Frame(["a", "b"]))
     with pytest.raises(InvalidMassError, match="shape"):
         MassBatch.bayesian([[0.5, 0.5]], model=model)
     with pytest.raises(InvalidMassError, match="sum to"):

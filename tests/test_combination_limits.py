@@ -281,7 +281,8 @@ def test_a_bad_limit_on_the_command_line_is_one_line(tmp_path, capsys, value):
 
 
 @pytest.mark.parametrize(("flag", "module", "limit", "rule", "frame"), [
-    ("max-element-tuples", "belief.plan", "MAX_ELEMENT_TUPLES", "pcr6", {"frame": [f"t{k}" for k in range(7)]}),
+    ("max-element-tuples", "belief.plan", "MAX_ELEMENT_TUPLES", "pcr6",
+     {"frame": [f"t{k}" for k in range(7)], "model": {"type": "free"}}),
     ("max-plus-tuples", "belief.extra_rules", "MAX_PLUS_TUPLES", "pcr6_plus",
      {"frame": ["a", "b"], "model": {"type": "shafer"}}),
 ])

@@ -116,7 +116,7 @@ def test_the_criteria_can_disagree_and_tie():
 
 def test_free_model_decisions_count_the_shared_region():
     # Free model on {a, b}: m(a∩b) = 1 gives Bel(a) = Bel(b) = 1, BetP(a) = BetP(b) = 1 (a∩b ⊆ a and ⊆ b).
-    m = MassFunction({"a&b": 1.0}, frame=["a", "b"])
+    m = MassFunction({"a&b": 1.0}, frame=["a", "b"], model="free")
     for criterion in CRITERIA:
         assert decide(m, criterion) == Decision(["a", "b"], 1.0)
     assert decide(m, "bel", candidates=["a&b", "a|b"]).elements == ["a&b", "a|b"]

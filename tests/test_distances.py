@@ -170,8 +170,8 @@ def test_three_source_conflict_by_hand():
 
 def test_the_free_model_has_no_conflict_but_the_tracking_model_has():
     frame = Frame(["t1", "t2", "FA"])
-    m1 = MassFunction({"t1": 0.7, "FA": 0.3}, frame=frame)
-    m2 = MassFunction({"t2": 0.6, "FA": 0.4}, frame=frame)
+    m1 = MassFunction({"t1": 0.7, "FA": 0.3}, frame=frame, model="free")
+    m2 = MassFunction({"t2": 0.6, "FA": 0.4}, frame=frame, model="free")
     assert conflict(m1, m2) == 0.0
     tracking = Model.tracking(frame)
     # Dynamic fusion under the tracking model: t1∩FA, FA∩t2 are empty, t1∩t2 is not.
@@ -335,7 +335,7 @@ def test_different_frames_or_models_are_refused(function):
     with pytest.raises(FrameError):
         function(m1, MassFunction({"a": 1.0}, frame=["a", "c"]))
     with pytest.raises(ModelError):
-        function(m1, MassFunction({"a": 1.0}, frame=["a", "b"], model="shafer"))
+        function(m1, MassFunction({"a": 1.0}, frame=["a", "b"], model="free"))
     with pytest.raises(TypeError):
         function(m1, {"a": 1.0})
 

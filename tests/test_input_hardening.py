@@ -194,7 +194,7 @@ def test_an_intersection_whose_normal_form_explodes_is_refused():
 
 # -- large frames ------------------------------------------------------------------------------------------
 def test_measures_on_a_free_frame_beyond_floating_point(capsys, write):
-    data = {"frame": names(1100), "mass": {"h0": 1.0}}
+    data = {"frame": names(1100), "model": {"type": "free"}, "mass": {"h0": 1.0}}
     bba = write("bba.json", data)
     refused(capsys, "measures", bba, says=["BetP", "2^1099"])
     m = MassFunction.from_dict(data)
@@ -206,7 +206,7 @@ def test_measures_on_a_free_frame_beyond_floating_point(capsys, write):
 
 
 def test_measures_on_a_free_frame_of_a_thousand_hypotheses_still_work(capsys, write):
-    bba = write("bba.json", {"frame": names(1000), "mass": {"|".join(names(1000)): 1.0}})
+    bba = write("bba.json", {"frame": names(1000), "model": {"type": "free"}, "mass": {"|".join(names(1000)): 1.0}})
     code, out, _ = run(capsys, "measures", bba, "--json")
     assert code == 0
     (row,) = json.loads(out).values()

@@ -112,7 +112,7 @@ def mass_with_queries(count=3, **kwargs):
 
 def test_basic_construction_and_mapping_protocol():
     m = MassFunction({"a": 0.6, "a|b": 0.4}, frame=["a", "b"])
-    assert m.model == Model.free(AB) and m.frame == AB
+    assert m.model == Model.shafer(AB) and m.frame == AB   # Shafer's model unless another is named
     assert m["a"] == 0.6 and m[AB.element("b|a")] == 0.4 and m["b"] == 0.0
     assert m.mass("a") == 0.6
     assert "a" in m and "b" not in m and 3 not in m
@@ -218,7 +218,8 @@ def test_vacuous_and_categorical():
     hybrid = Model.hybrid(ABC, ["c"])
     assert MassFunction.vacuous(model=hybrid) == MassFunction({"a|b": 1.0}, model=hybrid)
     assert MassFunction.vacuous(frame=AB) == MassFunction({"a|b": 1.0}, frame=AB)
-    assert MassFunction.categorical("b&a", frame=AB) == MassFunction({"a&b": 1.0}, frame=AB)
+    assert MassFunction.categorical("b&a", frame=AB, model="free") == MassFunction({"a&b": 1.0}, frame=AB,
+                                                                                  model="free")
     assert MassFunction.categorical("a|c", model=hybrid) == MassFunction({"a": 1.0}, model=hybrid)
 
 
@@ -249,7 +250,7 @@ def test_exact_equality_versus_isclose():
     assert a.isclose(b) and b.isclose(a)
     c = MassFunction({"a": 0.3, "b": 0.7 - 1e-7, "a|b": 1e-7}, frame=AB)
     assert not b.isclose(c) and b.isclose(c, abs_tol=1e-6)
-    assert not b.isclose(MassFunction({"a": 0.3, "b": 0.7}, frame=AB, model="shafer"))
+    assert not b.isclose(MassFunction({"a": 0.3, "b": 0.7}, frame=AB, model="free"))
     with pytest.raises(TypeError):
         b.isclose({"a": 0.3})
     assert b != {"a": 0.3, "b": 0.7}
@@ -262,7 +263,7 @@ def test_canonical_order_whatever_the_input_order():
         {"b&a": 0.3, "a": 0.1, "b|a": 0.4, "b": 0.2},
         {AB.element("a|b"): 0.4, "b": 0.2, AB["a"]: 0.1, "a&b": 0.3},
     ]
-    built = [MassFunction(d, frame=AB) for d in orders]
+    built = [MassFunction(d, frame=AB, model="free") for d in orders]
     first = built[0]
     for m in built[1:]:
         assert m == first and hash(m) == hash(first)
@@ -389,7 +390,7 @@ def test_plausibility_is_one_minus_belief_of_the_complement_under_shafer(data):
 
 def test_complement_law_does_not_hold_on_the_free_model():
     # free model: m(a∩b) = 1 gives Pls(a) = 1 but 1 - Bel(b) = 0
-    m = MassFunction({"a&b": 1.0}, frame=AB)
+    m = MassFunction({"a&b": 1.0}, frame=AB, model="free")
     assert m.pls("a") == 1.0 and 1.0 - m.bel("b") == 0.0
 
 
@@ -568,7 +569,7 @@ def test_under_requires_a_model_at_least_as_strict(pair):
 
 
 def test_under_examples():
-    m = MassFunction({"a&b": 0.3, "a": 0.7}, frame=AB)
+    m = MassFunction({"a&b": 0.3, "a": 0.7}, frame=AB, model="free")
     shafer = Model.shafer(AB)
     assert m.under(shafer) == MassFunction({"empty": 0.3, "a": 0.7}, model=shafer, subnormal=True)
     with pytest.raises(ModelError):
@@ -692,7 +693,7 @@ def test_batch_validation_names_the_row():
         MassBatch.from_mass_functions([])
     with pytest.raises(ValueError):
         MassBatch.from_mass_functions([MassFunction({"a": 1.0}, frame=AB),
-                                       MassFunction({"a": 1.0}, frame=AB, model="shafer")])
+                                       MassFunction({"a": 1.0}, frame=AB, model="free")])
 
 
 def test_batch_merges_columns_that_denote_the_same_element():
@@ -764,7 +765,7 @@ def test_free_model_pic_of_betp_and_dsmp():
     # being taken over the 7 parts of the refined frame, PIC(P) = 1 + Σ p log2 p / log2 7
     # (ibid. eq. (29)).  Reproduced with evidencelib 1.3 (0.117630, 0.898567).
     frame = Frame(["A", "B", "C"])
-    m = MassFunction({"A&B&C": 0.1, "A&B": 0.2, "A": 0.3, "A|B": 0.1, "A|B|C": 0.3}, frame=frame)
+    m = MassFunction({"A&B&C": 0.1, "A&B": 0.2, "A": 0.3, "A|B": 0.1, "A|B|C": 0.3}, frame=frame, model="free")
     names = frame.hypotheses
 
     def part_probabilities(measure):
@@ -793,7 +794,7 @@ def test_free_model_belief_bounds_note():
     # Dezert & Smarandache, "A note on computing lower and upper bounds of subjective
     # probability from masses of belief" (2012): free model Θ = {A, B}, m(A∩B) = 0.4,
     # m(A) = 0.6 gives Bel(A) = 1, Pl(A) = 1, Bel(B) = 0.4, Pl(B) = 1 (evidencelib 1.3 agrees).
-    m = MassFunction({"A&B": 0.4, "A": 0.6}, frame=["A", "B"])
+    m = MassFunction({"A&B": 0.4, "A": 0.6}, frame=["A", "B"], model="free")
     assert m.bel("A") == pytest.approx(1.0) and m.pls("A") == pytest.approx(1.0)
     assert m.bel("B") == pytest.approx(0.4) and m.pls("B") == pytest.approx(1.0)
 
@@ -807,7 +808,7 @@ def test_generalized_pignistic_transformation_free_two_hypotheses():
     #   BetP(B)   = .2·1/2 + .3 + .4 + .1·2/3 = 52/60
     #   BetP(A∩B) = .2·1/2 + .3·1/2 + .4 + .1·1/3 = 41/60
     #   BetP(A∪B) = 1.  (evidencelib 1.3 gives the same values.)
-    m = MassFunction({"A": 0.2, "B": 0.3, "A&B": 0.4, "A|B": 0.1}, frame=["A", "B"])
+    m = MassFunction({"A": 0.2, "B": 0.3, "A&B": 0.4, "A|B": 0.1}, frame=["A", "B"], model="free")
     assert m.betp("A") == pytest.approx(49 / 60)
     assert m.betp("B") == pytest.approx(52 / 60)
     assert m.betp("A&B") == pytest.approx(41 / 60)

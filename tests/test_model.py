@@ -254,8 +254,10 @@ def test_to_dict_shapes():
 
 
 def test_from_dict_defaults():
-    assert Model.from_dict(ABC, None) == Model.free(ABC)
-    assert Model.from_dict(ABC, {}) == Model.free(ABC)
+    # Shafer's model unless another is named: a BBA file without "model" is read as DST users write it.
+    assert Model.from_dict(ABC, None) == Model.shafer(ABC)
+    assert Model.from_dict(ABC, {}) == Model.shafer(ABC)
+    assert Model.from_dict(ABC, {"type": "free"}) == Model.free(ABC)
     assert Model.from_dict(ABC, {"empty": ["a&b"]}) == Model.hybrid(ABC, ["a&b"])
     assert Model.from_dict(Frame(["t1", "FA"]), {"type": "tracking"}) == Model.for_targets(1)
 

@@ -101,7 +101,7 @@ def test_a_table_over_the_limit_is_refused_before_it_is_built(monkeypatch):
 
 def test_element_by_element_tables_have_their_own_limit(monkeypatch):
     frame = Frame([f"t{i}" for i in range(13)])       # the free model of 13 hypotheses has no region codes
-    m = MassFunction({"t0": 0.5, "t1|t2": 0.25, "t3&t4": 0.25}, frame=frame)
+    m = MassFunction({"t0": 0.5, "t1|t2": 0.25, "t3&t4": 0.25}, frame=frame, model="free")
     assert coded_relations(m.model, tuple(m.focal), tuple(m.focal)) is None
     assert m.batch().bel(["t0", "t1"]).shape == (1, 2)
     monkeypatch.setattr(belief.batch, "MAX_ELEMENT_ENTRIES", 5)

@@ -651,7 +651,7 @@ def test_fewer_than_two_sources():
 
 def test_sources_under_different_models_or_frames():
     shafer, m1, _ = shafer_ab()
-    free = MassFunction({"a": 0.5, "b": 0.5}, frame=["a", "b"])
+    free = MassFunction({"a": 0.5, "b": 0.5}, frame=["a", "b"], model="free")
     with pytest.raises(ModelError, match="model"):
         combine(m1, free)
     other = MassFunction({"a": 0.5, "c": 0.5}, frame=["a", "c"])

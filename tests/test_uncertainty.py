@@ -120,7 +120,7 @@ def test_nonspecificity_examples():
     assert nonspecificity(MassFunction.vacuous(model=shafer)) == pytest.approx(2.0, abs=1e-15)
     assert nonspecificity(MassFunction({"a": 0.2, "d": 0.8}, model=shafer)) == 0.0
     # On the free model |a ∪ b| counts three Venn regions (a only, b only, a∩b), |a| two.
-    free = MassFunction({"a|b": 0.5, "a": 0.5}, frame=["a", "b"])
+    free = MassFunction({"a|b": 0.5, "a": 0.5}, frame=["a", "b"], model="free")
     assert nonspecificity(free) == pytest.approx(0.5 * math.log2(3) + 0.5, abs=1e-15)
 
 
