@@ -182,13 +182,18 @@ def _draw_hasse(axes, m: MassFunction) -> None:
         members = levels[level]
         for k, element in enumerate(members):
             position[element] = ((k + 1) / (len(members) + 1), row)
-    for a, b in focal_hasse_edges(m):
-        (xa, ya), (xb, yb) = position[a], position[b]
-        axes.plot([xa, xb], [ya, yb], color="tab:gray", zorder=1)
+    labels = {}
     for element, value in zip(focal, m.values.tolist()):
         x, y = position[element]
         axes.scatter([x], [y], s=300 + 1500 * value, color="tab:blue", alpha=0.35, zorder=2)
-        axes.annotate(f"{element}\n{value:.3g}", (x, y), ha="center", va="center", fontsize=8, zorder=3)
+        labels[element] = axes.text(x, y, f"{element}\n{value:.3g}", ha="center", va="center", fontsize=8, zorder=3,
+                                    bbox={"boxstyle": "round,pad=0.2", "facecolor": "white", "edgecolor": "none",
+                                          "alpha": 0.85})
+    for a, b in focal_hasse_edges(m):
+        # Each edge stops at the boxes of its two labels, so that no line is drawn through a name.
+        axes.annotate("", xy=position[b], xytext=position[a], zorder=1,
+                      arrowprops={"arrowstyle": "-", "color": "tab:gray", "patchA": labels[a].get_bbox_patch(),
+                                  "patchB": labels[b].get_bbox_patch(), "shrinkA": 2, "shrinkB": 2})
     axes.set_xlim(0, 1)
     axes.set_ylim(-0.6, len(ordered) - 0.4)
     axes.set_yticks(range(len(ordered)), [str(level) for level in ordered])

@@ -198,3 +198,23 @@ def test_a_plot_of_many_focal_elements_and_hypotheses_draws_the_largest_and_says
     assert heights[-1] == pytest.approx(sum(range(1, 31)) / 1830) and sum(heights) == pytest.approx(1.0)
     assert f"(the {MAX_PLOTTED_HYPOTHESES} of largest BetP of 60)" in intervals.get_title()
     assert [t.get_text() for t in intervals.get_yticklabels()] == names[-MAX_PLOTTED_HYPOTHESES:]
+
+
+def test_hasse_edges_stop_at_the_labels_instead_of_crossing_them():
+    pytest.importorskip("matplotlib")
+    from matplotlib.text import Annotation
+
+    from belief import MassFunction
+    from belief.plot import focal_hasse_edges, plot_mass
+
+    m = MassFunction({"a": 0.4, "a|b": 0.25, "c": 0.15, "a&b": 0.1, "a|b|c": 0.1}, frame=["a", "b", "c"],
+                     model="free")
+    hasse = plot_mass(m).axes[2]
+    labels = {text.get_text().split("\n")[0]: text for text in hasse.texts if not isinstance(text, Annotation)}
+    assert set(labels) == {str(e) for e in m.focal}
+    assert all(text.get_bbox_patch() is not None and text.get_bbox_patch().get_facecolor()[3] > 0.5
+               for text in labels.values())
+    edges = [text.arrow_patch for text in hasse.texts if isinstance(text, Annotation)]
+    assert not hasse.lines and len(edges) == len(focal_hasse_edges(m))
+    label_boxes = {id(text.get_bbox_patch()) for text in labels.values()}
+    assert all(id(edge.patchA) in label_boxes and id(edge.patchB) in label_boxes for edge in edges)
