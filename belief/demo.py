@@ -30,7 +30,8 @@ def _rows(out: TextIO, title: str, m: MassFunction, queries: list[str]) -> None:
     out.write("  mass: " + ", ".join(f"m({e.format('unicode')}) = {v:.4f}" for e, v in m.items()) + "\n")
     out.write(f"  {'proposition':<14}{'Bel':>8}{'Pls':>8}{'BetP':>8}\n")
     for q in queries:
-        out.write(f"  {q:<14}{m.bel(q):>8.4f}{m.pls(q):>8.4f}{m.betp(q):>8.4f}\n")
+        name = m.frame.element(q).format("unicode")   # written as in the mass line above, not as typed
+        out.write(f"  {name:<14}{m.bel(q):>8.4f}{m.pls(q):>8.4f}{m.betp(q):>8.4f}\n")
 
 
 def run_demo(out: TextIO) -> None:

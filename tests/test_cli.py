@@ -189,6 +189,8 @@ def test_console_script_error_has_no_traceback(tmp_path):
 def test_demo_runs(capsys):
     code, out, _ = run(capsys, "demo")
     assert code == 0 and "Paul" in out and "pignistic" in out
+    # Propositions are written one way throughout: the tables as the mass lines.
+    assert "Peter ∪ Paul" in out and "Peter|Paul" not in out and "a&b" not in out and "a∩b" in out
 
 
 def test_plugin_entry_points_are_registered(monkeypatch, capsys):
