@@ -20,6 +20,7 @@ from typing import Union
 import numpy as np
 
 from belief.errors import BeliefError, FormatError
+from belief.install import install_command
 from belief.frame import Element
 from belief.mass import MassFunction
 
@@ -45,7 +46,7 @@ def _matplotlib():
     except ModuleNotFoundError as exc:
         if exc.name is None or exc.name.split(".")[0] != "matplotlib":
             raise
-        raise MissingPlotExtraError("drawing needs matplotlib, which is not installed: pip install 'belief[plot]'",
+        raise MissingPlotExtraError(f"drawing needs matplotlib, which is not installed: {install_command('plot')}",
                                     name="matplotlib") from None
     return Figure, FigureCanvasAgg
 

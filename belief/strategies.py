@@ -4,7 +4,7 @@
 :func:`bayesian_sources` draw frames, models, elements, mass functions and batches whose masses are small integer
 weights over their sum (1 to :data:`MAX_WEIGHT`), chosen so that Hypothesis shrinks a counterexample towards
 something a person reads at a glance (see :mod:`belief.testing`); :func:`simplest` shows where a strategy
-shrinks to.  Hypothesis is an optional dependency (``pip install 'belief[testing]'``).
+shrinks to.  Hypothesis is an optional dependency (``pip install 'belief-dsmt[testing]'``).
 """
 
 from __future__ import annotations

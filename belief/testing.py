@@ -1,6 +1,6 @@
 """Property-based testing for users of :mod:`belief`: Hypothesis strategies and a law checker for rules.
 
-Hypothesis is an optional dependency (``pip install 'belief[testing]'``); this module
+Hypothesis is an optional dependency (``pip install 'belief-dsmt[testing]'``); this module
 imports it at once and raises :class:`ImportError` without it.
 
 Strategies
@@ -50,7 +50,10 @@ try:
     from hypothesis.errors import FailedHealthCheck, Unsatisfiable
     from hypothesis.strategies import SearchStrategy
 except ImportError as exc:  # pragma: no cover - exercised in a subprocess by the tests
-    raise ImportError("belief.testing needs Hypothesis, an optional dependency: pip install 'belief[testing]'") from exc
+    from belief.install import install_command
+
+    raise ImportError("belief.testing needs Hypothesis, an optional dependency: "
+                      f"{install_command('testing')}") from exc
 
 import numpy as np
 

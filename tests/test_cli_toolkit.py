@@ -162,7 +162,7 @@ def test_plot_without_matplotlib_names_the_extra(files, tmp_path):
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert result.returncode == 1
     assert result.stderr.strip().splitlines() == [
-        "belief: error: drawing needs matplotlib, which is not installed: pip install 'belief[plot]'"]
+        "belief: error: drawing needs matplotlib, which is not installed: pip install 'belief-dsmt[plot]'"]
     assert not (tmp_path / "f.png").exists()
 
 

@@ -448,4 +448,4 @@ def test_without_hypothesis_the_import_says_what_to_install():
     script = "import sys; sys.modules['hypothesis'] = None\nimport belief.testing"
     result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
     assert result.returncode != 0
-    assert "ImportError" in result.stderr and "pip install 'belief[testing]'" in result.stderr
+    assert "ImportError" in result.stderr and "pip install 'belief-dsmt[testing]'" in result.stderr

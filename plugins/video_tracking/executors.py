@@ -20,6 +20,8 @@ import os
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any, TypeVar
 
+from belief.install import install_command
+
 from .errors import TrackingError
 
 __all__ = ["outcomes", "executor", "runs_here", "describe_error", "MAX_ERROR_CHARS"]
@@ -121,7 +123,7 @@ def executor(workers: int | None, scheduler: str | None, tasks: int) -> Iterator
     try:
         from distributed import Client, LocalCluster
     except ImportError:
-        raise TrackingError('a Dask scheduler needs the dask extra: pip install "belief[dask]"') from None
+        raise TrackingError(f"a Dask scheduler needs the dask extra: {install_command('dask')}") from None
     with contextlib.ExitStack() as stack:
         if scheduler == "local":
             cluster = stack.enter_context(LocalCluster(n_workers=workers or os.cpu_count() or 1,

@@ -1,6 +1,6 @@
 """The optional packages the plugin needs, with one line saying how to install them.
 
-``pip install belief`` gives the fusion library alone (numpy and networkx); the tracking
+``pip install belief-dsmt`` gives the fusion library alone (numpy and networkx); the tracking
 plugin's own dependencies come with the ``tracking`` extra.  A module that needs one of
 them imports it through :func:`require`, so that a missing package names the extra to
 install instead of ending in a bare ``No module named 'cv2'``.
@@ -19,6 +19,8 @@ import importlib
 import os
 from types import ModuleType
 
+from belief.install import install_command
+
 from .errors import MissingExtraError
 
 __all__ = ["require", "EXTRA", "INSTALL"]
@@ -26,7 +28,7 @@ __all__ = ["require", "EXTRA", "INSTALL"]
 #: The extra that brings the plugin's dependencies.
 EXTRA = "tracking"
 #: The command that installs it.
-INSTALL = f"pip install 'belief[{EXTRA}]'"
+INSTALL = install_command(EXTRA)
 
 #: The import name of each optional package, and the distribution pip installs.
 PACKAGES = {"cv2": "opencv-python-headless", "motmetrics": "motmetrics", "matplotlib": "matplotlib", "tqdm": "tqdm",

@@ -354,7 +354,7 @@ def run_experiment(experiment: Experiment, out_dir: str | os.PathLike[str], *, w
     scheduler : str, optional
         The address of a Dask scheduler (``tcp://host:8786``), or ``"local"`` to start a
         Dask cluster on this machine; needs the ``dask`` extra
-        (``pip install "belief[dask]"``).  Recorded videos must be readable at the same path
+        (``pip install "belief-dsmt[dask]"``).  Recorded videos must be readable at the same path
         on every worker.  The scheduler runs the cells as pickled Python tasks and sends
         back pickled results: connect only to a scheduler you trust (one that is not yours
         can run its own code here).
