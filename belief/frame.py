@@ -186,8 +186,9 @@ class Frame:
         if not _plain_names(names):
             _check_names(names)
         self._names = names
-        self._index = {name: i for i, name in enumerate(names)}
-        self._bit = {name: 1 << i for i, name in enumerate(names)}
+        positions = range(len(names))
+        self._index = dict(zip(names, positions))
+        self._bit = dict(zip(names, map((1).__lshift__, positions)))
         self._hash = hash(("belief.Frame", names))
         self._singletons = None
         self._by_identity = None

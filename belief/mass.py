@@ -104,6 +104,8 @@ class MassFunction(_MassSlots):
             # mass) goes to the slower constructors below, which raise the errors.  The masks
             # of propositions read before are remembered by their text (a bounded dict).
             get, bits, _, parsed = context
+            if len(masses) > _NAMES_AT_ONCE and _all_hypotheses(self, masses, model, bits):
+                return
             bit_of = bits.get
             known = parsed.get
             masks = []
@@ -730,6 +732,34 @@ def _spaced_unions(mass: MassFunction, masses: Mapping, model: Model, bit: dict[
         masks = [m for m, v in zip(masks, values) if v > 0.0]
         values = [v for v in values if v > 0.0]
     mass._set_unions(model, masks, values)
+    return True
+
+
+#: Above this many propositions, a mapping whose every key is a hypothesis's name is read at once (builtins over all
+#: the keys and values, no Python step per item).
+_NAMES_AT_ONCE = 64
+
+
+def _all_hypotheses(m: MassFunction, masses: Mapping, model: Model, bits: dict) -> bool:
+    """Set ``m`` from masses on single hypotheses (every key a name of the frame), or return False untouched.
+
+    The keys are names, so their masks are distinct bits; the values must all be positive floats
+    summing to one (NaN and infinity fail the sum), else the item-by-item reading decides.
+    """
+    try:
+        masks = list(map(bits.__getitem__, masses))
+    except (KeyError, TypeError):
+        return False
+    values = list(masses.values())
+    # Written so that a NaN, for which every comparison is False, fails each test.
+    if (set(map(type, values)) != {float} or not min(values) > 0.0
+            or not abs(exact_sum(values) - 1.0) <= SUM_TOLERANCE):
+        return False
+    if type(m) is MassFunction:
+        _set(m, "__class__", _FreshMass)
+        _fill(m, model, masks, values, True)
+    else:
+        m._set_unions(model, masks, values)
     return True
 
 

@@ -891,3 +891,28 @@ def test_finite_masses_whose_sum_overflows_are_refused_as_invalid_masses(build):
         warnings.simplefilter("error")                   # no overflow warning on the way either
         with pytest.raises(InvalidMassError, match="sum to inf"):
             build()
+
+
+@given(st.lists(st.integers(1, 1000), min_size=65, max_size=200), st.randoms(use_true_random=False))
+@settings(max_examples=40, deadline=None)
+def test_many_masses_on_single_hypotheses_read_at_once_equal_the_element_by_element_reading(weights, random):
+    # More than 64 names are read by builtins over all the keys; the same masses given as Elements take the
+    # item-by-item path: both must give the same value object, bit for bit.
+    frame = Frame([f"h{i}" for i in range(len(weights) + 3)])
+    names = random.sample(frame.hypotheses, len(weights))
+    total = sum(weights)
+    masses = {name: w / total for name, w in zip(names, weights)}
+    correction = 1.0 - math.fsum(masses.values())
+    masses[names[0]] += correction
+    if abs(math.fsum(masses.values()) - 1.0) > 1e-9 or min(masses.values()) <= 0:
+        return
+    at_once = MassFunction(masses, frame=frame)
+    one_by_one = MassFunction({frame[name]: value for name, value in masses.items()}, frame=frame)
+    assert at_once == one_by_one and at_once.focal == one_by_one.focal
+    assert at_once.values.tolist() == one_by_one.values.tolist()
+    bad = dict(masses)
+    bad[names[1]] = float("nan")
+    with pytest.raises(InvalidMassError):
+        MassFunction(bad, frame=frame)
+    bad[names[1]] = 0
+    assert MassFunction(bad | {names[2]: masses[names[2]] + masses[names[1]]}, frame=frame)[names[1]] == 0.0
