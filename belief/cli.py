@@ -6,6 +6,12 @@ through the entry-point group ``belief.commands``: each entry point is a callabl
 ``register(subparsers)`` that adds parsers to the sub-parser collection, and sets a
 ``func(args) -> int`` default on each.  The core never imports a plugin by name.
 
+Every command, a plugin's included, takes ``-q`` (only results and errors: no note,
+announcement or progress bar) and ``-v`` (details on standard error: the inputs, model,
+rule, representation and limits in effect, and the time taken), before or after its name;
+a plugin reads them as ``args.quiet`` and ``args.verbose`` (:func:`verbosity`).  Every
+command that prints results has ``--json``.
+
 Bad input (an unknown hypothesis, masses that do not sum to one, a malformed file …)
 ends with one line on standard error naming the problem and exit status 1; a wrong
 command line ends with one line and status 2.
@@ -17,6 +23,7 @@ import argparse
 import contextlib
 import json
 import sys
+import time
 from collections.abc import Sequence
 from importlib.metadata import entry_points
 from typing import Any
@@ -28,7 +35,7 @@ from belief.mass import MassFunction, check_cardinality_range
 from belief.model import Model
 from belief.textfiles import load_json, read_text
 
-__all__ = ["main", "build_parser", "ENTRY_POINT_GROUP"]
+__all__ = ["main", "build_parser", "verbosity", "ENTRY_POINT_GROUP", "MODEL_NAMES", "CONJUNCTIVE_WITHOUT_CONFLICT"]
 
 ENTRY_POINT_GROUP = "belief.commands"
 
@@ -77,9 +84,24 @@ def _stdin_text(what: str) -> str:
 def _read_bba(path: str) -> MassFunction:
     data = _read_json(path, "BBA file")
     try:
-        return MassFunction.from_dict(data)
+        m = MassFunction.from_dict(data)
     except BeliefError as exc:
         raise type(exc)(f"{'standard input' if path == STDIN else path}: {exc}") from None
+    if _voice["level"] > 0:
+        _detail(_describe_source(path, m))
+    return m
+
+
+#: The names that ``--model`` takes besides a model file: the model of that type over the sources' frame.
+MODEL_NAMES = ("free", "shafer")
+
+
+def _model_data(text: str) -> Any:
+    """The JSON data of ``--model``: ``free`` or ``shafer`` name a model (a file of that name is ``./shafer``), any
+    other text is a model file."""
+    if text in MODEL_NAMES:
+        return {"type": text}
+    return _read_json(text, "model file")
 
 
 def _model_from(path: str, frame: Frame, data: Any) -> Model:
@@ -92,6 +114,66 @@ def _model_from(path: str, frame: Frame, data: Any) -> Model:
 
 def _print_json(data: Any) -> None:
     print(json.dumps(data, indent=2, ensure_ascii=False))
+
+
+# -- what a command says besides its results (-q / -v) ------------------------------------------
+#: The verbosity of the running command, set by :func:`main` from -q and -v: -1 quiet, 0 normal, 1 and more verbose;
+#: and the command's name, which starts each of its lines on standard error.
+_voice = {"level": 0, "command": ""}
+
+
+def verbosity(args: argparse.Namespace) -> int:
+    """-1 when ``args`` has -q, else the number of -v (0 without either).
+
+    Plugins read ``args.quiet`` and ``args.verbose`` the same way; a parser made without the ``belief``
+    command line (and so without these options) counts as neither.
+    """
+    if getattr(args, "quiet", False):
+        return -1
+    return int(getattr(args, "verbose", 0) or 0)
+
+
+def _note(text: str) -> None:
+    """A note on standard error (not a result, not an error): one line, left out with -q."""
+    if _voice["level"] >= 0:
+        print(f"belief {_voice['command']}: {_one_line(text)}", file=sys.stderr, flush=True)
+
+
+def _detail(text: str) -> None:
+    """A detail on standard error, printed only with -v."""
+    if _voice["level"] > 0:
+        print(f"belief {_voice['command']}: {_one_line(text)}", file=sys.stderr, flush=True)
+
+
+def _describe_model(model: Model) -> str:
+    """The model in a few words, for -v and the notes."""
+    if model.kind == "shafer":
+        return "Shafer's model (exclusive hypotheses)"
+    if model.kind == "tracking":
+        return f"the tracking model (false alarm {model.false_alarm})"
+    if not model.constrained:
+        return "the free DSm model (no empty intersection)"
+    terms = model.forbidden
+    shown = ", ".join(model.frame.term_name(t) for t in terms[:6]) + (", ..." if len(terms) > 6 else "")
+    return f"a hybrid model with {len(terms)} empty conjunction{'s' if len(terms) != 1 else ''} ({shown})"
+
+
+def _describe_source(path: str, m: MassFunction) -> str:
+    where = "standard input" if path == STDIN else path
+    names = ", ".join(m.frame.hypotheses[:8]) + (", ..." if len(m.frame) > 8 else "")
+    return (f"{where}: {len(m.focal)} focal element{'s' if len(m.focal) != 1 else ''} on a frame of "
+            f"{len(m.frame)} hypotheses ({names}) under {_describe_model(m.model)}")
+
+
+def _limits_in_effect(flags: dict) -> str:
+    """The limits of ``flags`` (option -> full name of the limit) as they stand, for -v."""
+    import importlib
+
+    shown = []
+    for name in flags.values():
+        module_name, attribute = name.rsplit(".", 1)
+        shown.append(f"{attribute} = {getattr(importlib.import_module(module_name), attribute):,}")
+    return "limits in effect: " + ", ".join(shown)
 
 
 def _print_mass(m: MassFunction, as_json: bool) -> None:
@@ -135,7 +217,7 @@ def _fmt(value: Any) -> str:
 def _cmd_lattice(args: argparse.Namespace) -> int:
     if args.frame is not None and args.n is not None:
         raise CommandError("belief lattice: error: give either N or --frame, not both")
-    data = _read_json(args.model, "model file") if args.model else None
+    data = _model_data(args.model) if args.model else None
     if args.frame is not None:
         frame = Frame.parse(args.frame)
     elif args.n is not None:
@@ -147,6 +229,7 @@ def _cmd_lattice(args: argparse.Namespace) -> int:
     else:
         raise CommandError("belief lattice: error: give the number of hypotheses N or --frame a,b,c")
     model = _model_from(args.model, frame, data) if args.model else Model.free(frame)
+    _detail(f"{len(frame)} hypotheses under {_describe_model(model)}")
     lattice = hyper_power_set(model)
     if args.json:
         _print_lattice_json(lattice, with_elements=not args.count)
@@ -272,7 +355,7 @@ def _cmd_combine(args: argparse.Namespace) -> int:
     sources = [_read_bba(path) for path in args.bba]
     model = None
     if args.model:
-        model = _model_from(args.model, sources[0].frame, _read_json(args.model, "model file"))
+        model = _model_from(args.model, sources[0].frame, _model_data(args.model))
     options = {}
     if args.r_mode is not None:
         options["r_mode"] = args.r_mode
@@ -281,10 +364,54 @@ def _cmd_combine(args: argparse.Namespace) -> int:
     for k, source in enumerate(sources[1:], start=2):
         if source.model != sources[0].model:
             raise FormatError(f"{args.bba[k - 1]} was elicited under another frame or model than {args.bba[0]}")
+    fusion_model = model if model is not None else sources[0].model
+    if _voice["level"] > 0:
+        _combine_details(info, sources, fusion_model, options)
     with _option_limits(args, LIMIT_FLAGS):
         result = combine(*sources, rule=info, model=model, **options)
+    if info.name in CONJUNCTIVE_WITHOUT_CONFLICT and _no_empty_intersection(fusion_model):
+        _note(f"the model has no empty intersection (the free DSm model), so {info.name} has no conflict to "
+              "redistribute and gives the conjunctive rule's result; for exclusive hypotheses give --model shafer, "
+              'or "model": {"type": "shafer"} in the BBA files')
+    _detail(f"result: {len(result.focal)} focal element{'s' if len(result.focal) != 1 else ''}")
     _print_mass(result, args.json)
     return 0
+
+
+#: The rules that send the mass of the products on empty intersections (the conflict) somewhere, or keep it on ∅:
+#: under a model with no empty intersection there is none, and each gives the conjunctive rule's result, which
+#: ``belief combine`` then says (tests/test_cli_quiet_json.py checks every one).  The R-weighted rule is not among
+#: them (it weighs every product by R, conflicting or not), nor the disjunctive, averaging, cautious and bold rules.
+CONJUNCTIVE_WITHOUT_CONFLICT = frozenset({"dsmc", "dempster", "yager", "dubois_prade", "dsmh", "pcr5", "pcr6",
+                                          "pcr5_plus", "pcr6_plus"})
+
+
+def _no_empty_intersection(model: Model) -> bool:
+    """Whether no intersection of hypotheses is empty under ``model`` (the free DSm model, whatever its type says).
+
+    A frame of one hypothesis has no intersection of two: no note is due there.
+    """
+    return len(model.frame) > 1 and not model.constrained
+
+
+def _combine_details(info, sources: Sequence[MassFunction], model: Model, options: dict) -> None:
+    """What ``belief combine -v`` says before combining: the rule, the fusion model, the work and the limits."""
+    import math
+
+    from belief.plan import coded_fast
+
+    given = ", ".join(f"{k}={v}" for k, v in options.items())
+    _detail(f"rule {info.name}{f' ({given})' if given else ''}: {info.summary}; "
+            f"{'associative' if info.associative else 'not associative: the sources are combined jointly'}")
+    dynamic = "" if model == sources[0].model else " (dynamic fusion: stricter than the sources' model)"
+    _detail(f"fusion model: {_describe_model(model)}{dynamic}")
+    tuples = math.prod(len(s.focal) for s in sources)
+    fast = coded_fast(model, [list(s.focal) for s in sources])
+    how = ("integer codes of the focal elements, combined by numpy" if fast else
+           "elements combined one tuple at a time (no integer codes under this model)")
+    _detail(f"{len(sources)} sources, {tuples:,} tuple{'s' if tuples != 1 else ''} of focal elements; "
+            f"representation: {how}")
+    _detail(_limits_in_effect(LIMIT_FLAGS))
 
 
 #: The options of ``belief combine`` that raise (or lower) a limit of a combination, and the limit each sets.
@@ -308,6 +435,7 @@ _TABLE_ADVICE = {"measures": "ask for fewer queries (--query PROP ...)",
 def _run_measuring(args: argparse.Namespace) -> int:
     """Run a measuring command with the table limits its options set; a refusal names the option."""
     with _option_limits(args, TABLE_LIMIT_FLAGS, {"ask for fewer queries": _TABLE_ADVICE.get(args.command)}):
+        _detail(_limits_in_effect(TABLE_LIMIT_FLAGS))
         return args.measuring(args)
 
 
@@ -429,7 +557,10 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     m = _read_bba(args.bba)
     figure = plot_mass(m, title=args.title or args.bba)
     _save_picture(figure, target)
-    print(f"wrote {target}")
+    if args.json:
+        _print_json({"file": str(target), "format": target.suffix[1:].lower() or "png"})
+    else:
+        print(f"wrote {target}")
     return 0
 
 
@@ -622,6 +753,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the picture to write, exactly there (its folder must exist); the format follows the "
                         "suffix (.png, .pdf, .svg, …), PNG without one")
     p.add_argument("--title", help="a title (default: the file name)")
+    p.add_argument("--json", action="store_true", help='print {"file": FIG, "format": "png"} instead of "wrote FIG"')
     p.set_defaults(func=_cmd_plot)
 
     p = sub.add_parser("demo", help="a short demonstration on embedded data",
@@ -633,7 +765,31 @@ def build_parser() -> argparse.ArgumentParser:
             ep.load()(sub)
         except Exception as exc:  # a broken plugin must not break the core commands
             print(f"belief: warning: plugin {ep.name!r} could not be loaded: {exc}", file=sys.stderr)
+    # -q and -v go before the command or after it, on every command a plugin's included.
+    _verbosity_options(parser, main_parser=True)
+    for command in {id(c): c for c in sub.choices.values()}.values():
+        _verbosity_options(command, main_parser=False)
     return parser
+
+
+def _verbosity_options(parser: argparse.ArgumentParser, main_parser: bool) -> None:
+    """-q/--quiet and -v/--verbose on ``parser``.
+
+    The main parser has the defaults; a command's parser none (``argparse.SUPPRESS``), so that an option given
+    before the command is not overwritten by the command's default.  A parser that has its own -q or -v keeps it.
+    """
+    quiet = {} if main_parser else {"default": argparse.SUPPRESS}
+    verbose = {"default": 0} if main_parser else {"default": argparse.SUPPRESS}
+    try:
+        parser.add_argument("-q", "--quiet", action="store_true",
+                            help="print only the results and the errors: no progress bar, note or announcement",
+                            **quiet)
+        parser.add_argument("-v", "--verbose", action="count",
+                            help="print details on standard error as well: the inputs read, the model, rule, "
+                                 "representation and settings in effect, and the time taken",
+                            **verbose)
+    except argparse.ArgumentError:
+        pass
 
 
 # A message quotes user text, which may hold line breaks; escaped, the refusal stays one line.
@@ -648,13 +804,20 @@ def _one_line(message: str) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
     _stdin["read"] = False
+    _voice.update(level=0, command="")
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
         if not getattr(args, "func", None):
             parser.print_help()
             return 2
-        return int(args.func(args) or 0)
+        if getattr(args, "quiet", False) and getattr(args, "verbose", 0):
+            raise CommandError(f"belief {args.command}: error: give -q (quiet) or -v (verbose), not both")
+        _voice.update(level=verbosity(args), command=args.command)
+        started = time.perf_counter()
+        status = int(args.func(args) or 0)
+        _detail(f"finished in {time.perf_counter() - started:.3f} s")
+        return status
     except CommandError as exc:
         print(exc, file=sys.stderr)
         return 2

@@ -8,15 +8,21 @@ started, lost, found again and ended automatically from the detections, or from 
 person blobs of the background model without them; ``--init BOXES``
 gives the targets of the first frame (later entries are still found automatically);
 ``--init-from-gt GT.txt`` takes every birth and death from a ground truth and scores the
-tracks against it.  ``belief track --demo --out DIR`` renders the synthetic demo scene,
+tracks against it; a MOTChallenge sequence folder is scored against its own ground truth
+(``gt/gt.txt``, :func:`~belief_tracking.sources.sequence_ground_truth`) when no ``--gt`` is
+given.  ``belief track --demo --out DIR`` renders the synthetic demo scene,
 tracks it automatically (the ground truth is not given to the tracker) and prints the
 scores against its ground truth.  ``--set KEY=VALUE`` reaches every
 setting of :class:`~belief_tracking.config.TrackerConfig`.
 
-``belief eval TRACKS.txt GT.txt`` scores tracks; ``belief experiment GRID.toml`` runs a
-grid of seeded runs.  Every value is checked here or in the settings dataclasses; bad
-input raises a :class:`~belief_tracking.errors.TrackingError`, which the ``belief``
-command line reports in one line with exit status 1.  ``belief track`` also exits with
+``belief eval TRACKS.txt GT.txt`` scores tracks (a run's output folder and a sequence folder
+stand for their files); ``belief experiment GRID.toml`` runs a grid of seeded runs.  With
+``--json`` each command prints its results as one JSON object; ``-q`` (``args.quiet``) leaves
+out the progress bars, notes and announcements, ``-v`` (``args.verbose``) adds the settings
+in effect (the ``belief`` command line gives every command both).  Every value is checked
+here or in the settings dataclasses; bad input raises a
+:class:`~belief_tracking.errors.TrackingError`, which the ``belief`` command line reports in
+one line with exit status 1.  ``belief track`` also exits with
 status 1, after writing the outputs of the frames it decoded, when a video decodes fewer
 frames than its container announces; SIGTERM ends it as Ctrl-C does, deleting the files it
 was writing (exit status 143).
@@ -42,6 +48,47 @@ __all__ = ["register", "register_eval", "register_experiment", "AUTOMATIC_WARM_U
 SCORES_EXPLAINED = ("(MOTA: 1 minus the missed people, false boxes and identity switches per ground-truth box; "
                     "IDF1: the share of boxes on the right person with the right id; 1 is perfect for both, a box "
                     "counts when it overlaps its person by IoU >= 0.5)")
+
+
+def _quiet(args: argparse.Namespace) -> bool:
+    """-q of the ``belief`` command line (a parser without it, as in the doctests, is not quiet)."""
+    return bool(getattr(args, "quiet", False))
+
+
+def _verbose(args: argparse.Namespace) -> bool:
+    """-v of the ``belief`` command line."""
+    return bool(getattr(args, "verbose", 0)) and not _quiet(args)
+
+
+def _say(args: argparse.Namespace, line: str, *, detail: bool = False) -> None:
+    """A line on standard error, ``belief COMMAND: line``: left out with -q, and a ``detail`` only printed with -v."""
+    if _quiet(args) or (detail and not _verbose(args)):
+        return
+    text = " ".join(line.splitlines())
+    print(f"belief {getattr(args, 'command', None) or 'track'}: {text}", file=sys.stderr, flush=True)
+
+
+def _json_ready(value: Any) -> Any:
+    """``value`` with NaN and infinities as None and numpy numbers as Python ones, for :func:`json.dumps`."""
+    import math
+
+    import numpy as np
+
+    if isinstance(value, dict):
+        return {str(k): _json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_ready(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+def _print_json(data: Any) -> None:
+    print(json.dumps(_json_ready(data), indent=2, ensure_ascii=False))
 
 
 
@@ -198,9 +245,13 @@ def _track(args: argparse.Namespace) -> int:
     config = TrackerConfig.from_settings(_settings(args), "the tracker's settings")
     if args.demo:
         _demo_arguments(args)
-    out = _track_output(args)
+    found = None if args.demo else _sequence_gt(args)
+    out = _track_output(args, found)
     try:
-        summary = _track_demo(args, config, out) if args.demo else _track_source(args, config, out)
+        if args.demo:
+            summary, args.scored_against = _track_demo(args, config, out)
+        else:
+            summary, args.scored_against = _track_source(args, config, out, found)
         _report(args, summary)
     except BaseException as exc:
         out.abort()
@@ -214,15 +265,25 @@ def _track(args: argparse.Namespace) -> int:
 DEMO_OUTPUTS = ("gt.txt", "scene.avi")
 
 
-def _track_output(args: argparse.Namespace):
-    """The output folder of ``belief track``, checked against every input before any work."""
+def _track_output(args: argparse.Namespace, found: Path | None = None):
+    """The output folder of ``belief track``, checked against every input (``found``: the sequence's ground truth)
+    before any work."""
     from .outdir import OutputFolder, input_paths
     from .runner import output_names
 
     names = output_names(write_video=not args.no_video, extra=DEMO_OUTPUTS if args.demo else ())
     inputs = input_paths(args.source, args.init, args.init_from_gt, args.gt, args.detections,
-                         getattr(args, "settings", None))
+                         getattr(args, "settings", None), found)
     return OutputFolder(args.out, names, inputs=inputs, force=args.force)
+
+
+def _sequence_gt(args: argparse.Namespace) -> Path | None:
+    """The ground truth of a MOTChallenge sequence folder given as SOURCE, when no other is given (None else)."""
+    from .sources import sequence_ground_truth
+
+    if args.source is None or args.gt is not None or args.init_from_gt is not None:
+        return None
+    return sequence_ground_truth(args.source)
 
 
 def _demo_arguments(args: argparse.Namespace) -> None:
@@ -236,6 +297,48 @@ def _announce(line: str) -> None:
     print(f"belief track: {line}", file=sys.stderr, flush=True)
 
 
+def _announcer(args: argparse.Namespace):
+    """Where a run's announcements go: standard error, or nowhere with -q."""
+    return None if _quiet(args) else _announce
+
+
+def _progress(args: argparse.Namespace) -> bool:
+    return not args.no_progress and not _quiet(args)
+
+
+def _track_details(args: argparse.Namespace, config, frames, init: str, detections, gt) -> None:
+    """What ``belief track -v`` says before the run: the source, the tracker's settings, the inputs in effect."""
+    from .limits import clipped
+    from .sources import sequence_detections
+
+    if not _verbose(args):
+        return
+    count = f"{frames.count:,} frames" if frames.count else "frames (count unknown)"
+    _say(args, f"source {clipped(frames.name)}: {frames.kind}, {count} of {frames.width}x{frames.height} at "
+               f"{frames.fps:g} fps", detail=True)
+    fusion = f"belief fusion ({config.describe()})" if config.fusion == "belief" else config.describe()
+    _say(args, f"tracker: {fusion}, {config.particles} particles, cues "
+               f"{', '.join(config.cues)}, warm-up {config.warm_up} frames, seed {args.seed}"
+               f"{', adaptive particles' if config.adaptive_particles else ''}"
+               f"{', template update' if config.template_update else ''}", detail=True)
+    given = _settings(args)
+    if given:
+        _say(args, f"settings that differ from TrackerConfig's defaults: "
+                   f"{json.dumps(_json_ready(given), ensure_ascii=False)}", detail=True)
+    _say(args, f"initiation: {init}", detail=True)
+    if detections is not None:
+        boxes = sum(len(detections.at(f)) for f in detections.frames)
+        _say(args, f"detections: {clipped(detections.source)}, {boxes:,} boxes on {len(detections):,} frames",
+             detail=True)
+    else:
+        public = sequence_detections(args.source) if args.source is not None else None
+        hint = f" (the sequence's {clipped(public)} is used only with --detections {clipped(public)})" \
+            if public is not None else ""
+        _say(args, f"detections: none{hint}", detail=True)
+    _say(args, f"ground truth: {clipped(gt)}" if gt is not None else "ground truth: none (the tracks are not scored)",
+         detail=True)
+
+
 def _track_demo(args: argparse.Namespace, config, out):
     """``belief track --demo``: the demo scene, tracked automatically and scored against its ground truth."""
     from . import scenes
@@ -247,15 +350,24 @@ def _track_demo(args: argparse.Namespace, config, out):
     detections = _detections(args, len(scene), width, height)
     extra = {"gt.txt": lambda path: scenes.write_gt(path, gt, visibility=scene.visibility),
              "scene.avi": lambda path: scenes.write_video(path, scene)}
+    if _verbose(args):
+        from .sources import open_source
+
+        how = "detections" if detections is not None else "foreground blobs"
+        _track_details(args, config, open_source(scene), f"automatic, from {how}; the demo's ground truth only "
+                       "scores the tracks", detections, "the demo scene's own (written as gt.txt)")
     # The tracker finds the people itself, as on a user's video; the ground truth only scores it.
-    return run(scene, None, config, out, args.seed, write_video=not args.no_video,
-               progress=not args.no_progress, gt=gt, extra_outputs=extra, detections=detections, announce=_announce)
+    summary = run(scene, None, config, out, args.seed, write_video=not args.no_video, progress=_progress(args),
+                  gt=gt, extra_outputs=extra, detections=detections, announce=_announcer(args))
+    return summary, str(Path(args.out) / "gt.txt")
 
 
-def _track_source(args: argparse.Namespace, config, out):
-    """``belief track SOURCE``: with an init file, a ground truth's births and deaths, or neither."""
+def _track_source(args: argparse.Namespace, config, out, found: Path | None = None):
+    """``belief track SOURCE``: with an init file, a ground truth's births and deaths, or neither; ``found`` is the
+    ground truth of a sequence folder, which scores the tracks when no other is given."""
     from .errors import TrackingError
     from .initiation import init_from_gt, read_init_boxes
+    from .limits import clipped
     from .runner import run
     from .sources import open_source
 
@@ -272,30 +384,68 @@ def _track_source(args: argparse.Namespace, config, out):
     try:
         # The detection file is checked against the source's length and size, naming its lines.
         detections = _detections(args, frames.count, frames.width, frames.height)
+        if gt is None and found is not None:
+            from .motfiles import check_ground_truth, read_mot
+
+            gt = str(found)
+            # Read before it is named, so that a bad file is the only line printed.
+            check_ground_truth(read_mot(gt, what="ground-truth file"), frames.count, gt)
+            _say(args, f"{clipped(args.source)} is a MOTChallenge sequence: the tracks are scored against its ground "
+                       f"truth {clipped(gt)} (--gt FILE scores them against another)")
+        if args.init_from_gt is not None:
+            init = f"the births and deaths of {clipped(args.init_from_gt)}"
+        elif args.init is not None:
+            init = f"the boxes of {clipped(args.init)} on the first frame, later entries automatic"
+        else:
+            init = f"automatic, from {'the detections' if detections is not None else 'foreground blobs'}"
+        _track_details(args, config, frames, init, detections, gt)
     except BaseException:
         frames.close()
         raise
-    return run(frames, plan, config, out, args.seed, write_video=not args.no_video,
-               progress=not args.no_progress, gt=gt, detections=detections, announce=_announce)
+    summary = run(frames, plan, config, out, args.seed, write_video=not args.no_video, progress=_progress(args),
+                  gt=gt, detections=detections, announce=_announcer(args))
+    return summary, gt
 
 
 def _report(args: argparse.Namespace, summary) -> None:
-    """Print the run's speed and scores; a video that decoded fewer frames than announced is then an error."""
+    """Print the run's speed and scores (as one JSON object with --json; ``args.scored_against`` names the ground
+    truth that scored it); a video that decoded fewer frames than announced is then an error."""
     from .errors import VideoError
 
-    written = ", ".join(path.name for path in summary.files.values())
-    print(f"tracked {summary.frames} frames: {summary.tracking_fps:.1f} fps tracking, "
-          f"{summary.overall_fps:.1f} fps overall; outputs in {args.out}: {written}")
-    if summary.scores is not None:
-        s = summary.scores
-        print(f"MOTA {s.mota:.4f}  IDF1 {s.idf1:.4f}  ID switches {s.id_switches}  "
-              f"centre error mean {s.mean_centre_error:.2f} px, median {s.median_centre_error:.2f} px")
-        print(SCORES_EXPLAINED)
+    if getattr(args, "json", False):
+        _print_json(track_summary(summary, source=args.source if not args.demo else "demo", out=args.out,
+                                  gt=getattr(args, "scored_against", None)))
+    else:
+        written = ", ".join(path.name for path in summary.files.values())
+        print(f"tracked {summary.frames} frames: {summary.tracking_fps:.1f} fps tracking, "
+              f"{summary.overall_fps:.1f} fps overall; outputs in {args.out}: {written}")
+        if summary.scores is not None:
+            s = summary.scores
+            print(f"MOTA {s.mota:.4f}  IDF1 {s.idf1:.4f}  ID switches {s.id_switches}  "
+                  f"centre error mean {s.mean_centre_error:.2f} px, median {s.median_centre_error:.2f} px")
+            if not _quiet(args):
+                print(SCORES_EXPLAINED)
     if not summary.complete:
         # The outputs of the decoded frames are kept, but the run did not track the whole video.
         raise VideoError(f"{args.source}: decoded {summary.frames} of the {summary.expected_frames} frames the "
                          f"file announces (truncated or corrupt after frame {summary.frames}); the outputs of "
                          f"those {summary.frames} frames are in {args.out}")
+
+
+def track_summary(summary, *, source: str | None, out: str, gt: str | None) -> dict[str, Any]:
+    """What ``belief track --json`` prints: the run's counts, speed, scores and files, ready for :func:`json.dumps`.
+
+    Keys: ``source``, ``out``, ``frames``, ``expected_frames``, ``complete``, ``tracks`` (distinct ids), ``boxes``
+    (rows of tracks.txt), ``tracking_fps``, ``overall_fps``, ``gt`` (the ground truth that scored the tracks, or
+    None), ``scores`` (those of ``belief eval --json``, or None) and ``files`` (name to path).
+    """
+    tracks = summary.tracks
+    data = {"source": source, "out": str(out), **summary.to_dict(), "gt": gt}
+    data["tracks"] = int(len(set(tracks[:, 1].tolist()))) if len(tracks) else 0
+    data["boxes"] = int(len(tracks))
+    order = ("source", "out", "frames", "expected_frames", "complete", "tracks", "boxes", "tracking_fps",
+             "overall_fps", "gt", "scores", "files")
+    return _json_ready({key: data[key] for key in order})
 
 
 #: The description of ``belief track --help``.
@@ -306,8 +456,9 @@ TRACK_DESCRIPTION = ("Track targets in a video (a video file, a folder of images
                      "rule (or the adaptive, sum or product fusion). Without an init file, tracks start on "
                      "detections (--detections) or foreground blobs that persist, are hidden while nothing supports "
                      "them, take back their id when they are seen again, and end when they leave. Writes tracks.txt "
-                     "(MOTChallenge), diagnostics.csv, diagnostics.png, annotated.avi and summary.json into "
-                     "--out (each written under a temporary name and renamed), and removes the files of an earlier "
+                     "(MOTChallenge), diagnostics.csv, diagnostics.png (the diagnostics over the frames), "
+                     "tracks.png (every track's path over a frame of the video), annotated.avi and summary.json "
+                     "into --out (each written under a temporary name and renamed), and removes the files of an earlier "
                      "run there that this run does not write. It refuses to start when --out is, lies inside or "
                      "holds one of its inputs, or holds files that no run wrote there (a hidden list, "
                      ".belief-outputs.json, names the files runs wrote) unless --force. With --demo, "
@@ -338,6 +489,8 @@ def register(subparsers: Any) -> None:
     _add_tracker_settings(p)
     p.add_argument("--no-video", action="store_true", help="do not write annotated.avi")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--json", action="store_true",
+                   help="print the run's summary (counts, speed, scores, files) as one JSON object")
     p.add_argument("--force", action="store_true",
                    help="write into --out even if it holds files that no run wrote there: those of the run's file "
                         "names are replaced, the others left (never when --out holds an input)")
@@ -367,7 +520,8 @@ def _add_track_inputs(p: argparse.ArgumentParser) -> None:
                         "SEQ/det/det.txt, which are used only when given here. The boxes start, support and "
                         "correct the tracks; add 'detections' to --cues to fuse them as a cue as well")
     p.add_argument("--gt", metavar="GT.txt", help="MOTChallenge ground truth to score the tracks against "
-                                                  "(implied by --init-from-gt)")
+                                                  "(implied by --init-from-gt; without either, a MOTChallenge "
+                                                  "sequence SOURCE is scored against its own gt/gt.txt)")
 
 
 def _add_tracker_settings(p: argparse.ArgumentParser) -> None:
@@ -383,8 +537,8 @@ def _add_tracker_settings(p: argparse.ArgumentParser) -> None:
                                                   "see 'belief rules')")
     p.add_argument("--weight", choices=["bel", "pls", "betp"], help="particle weight (default bel)")
     p.add_argument("--template-update", action="store_true",
-                   help="let the appearance templates follow their targets (C (16)), frozen under occlusion; "
-                        "the adaptive fusion always does")
+                   help="let the appearance templates follow their targets (the template update of C (16)), frozen "
+                        "under occlusion; the adaptive fusion always does")
     p.add_argument("--adaptive-particles", action="store_true",
                    help="adapt each target's particle count to the conflict between its cues (at most --particles)")
     p.add_argument("--warm-up", type=_integer(0), metavar="N",
@@ -392,7 +546,8 @@ def _add_tracker_settings(p: argparse.ArgumentParser) -> None:
                         f"(default {AUTOMATIC_WARM_UP} without an init file, else 0)")
     p.add_argument("--diagnostics", choices=["strategy", "all"],
                    help="diagnostics.csv columns: those of the running parts (default), or all of them, whatever "
-                        "the fusion (W (33)-(35) masses, C (13) confidences, C (15) similarity)")
+                        "the fusion (the mean masses and belief of W (33)-(35), the feature confidences of C (13), the "
+                        "total similarity of C (15))")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="any tracker setting, e.g. --set belief.masses=normalised, --set location.literal=true, "
                         "--set adaptive_fusion.mix_norm=raw (repeatable; values in TOML syntax)")
@@ -403,15 +558,48 @@ def _cmd_eval(args: argparse.Namespace) -> int:
     from .evaluation import evaluate
     from .motfiles import read_mot
 
+    tracks_file, gt_file, notes = _eval_files(args)
     # A run that found nobody writes an empty tracks.txt: it scores as missing every box.
-    tracks = read_mot(args.tracks, allow_empty=True, what="tracks file")
-    gt = read_mot(args.gt, what="ground-truth file")
+    tracks = read_mot(tracks_file, allow_empty=True, what="tracks file")
+    gt = read_mot(gt_file, what="ground-truth file")
+    for line in notes:      # once both files are read: a bad one is the only line printed
+        _say(args, line)
+    _say(args, f"{len(tracks):,} boxes of {len(set(tracks[:, 1].tolist())) if len(tracks) else 0:,} tracks against "
+               f"{len(gt):,} ground-truth boxes of {len(set(gt[:, 1].tolist())):,} ids", detail=True)
     scores = evaluate(gt, tracks)
     if args.json:
         print(json.dumps(scores.to_dict(), indent=2))
     else:
         print(scores.format_table())
     return 0
+
+
+def _eval_files(args: argparse.Namespace) -> tuple[str, str, list[str]]:
+    """The files ``belief eval`` reads, and the notes that name them: a run's output folder stands for its tracks.txt,
+    and a MOTChallenge sequence folder for its ground truth (gt/gt.txt)."""
+    import os
+
+    from .errors import TrackFileError
+    from .limits import clipped
+    from .sources import SEQUENCE_GROUND_TRUTH
+
+    tracks, gt, notes = args.tracks, args.gt, []
+    if os.path.isdir(tracks):
+        if not os.path.isfile(os.path.join(tracks, "tracks.txt")):
+            raise TrackFileError(f"{clipped(tracks)} is a folder without tracks.txt: give a tracks file, or the "
+                                 "output folder of a belief track run")
+        tracks = os.path.join(tracks, "tracks.txt")
+        notes.append(f"reading the tracks of the run in {clipped(args.tracks)}: {clipped(tracks)}")
+    if os.path.isdir(gt):
+        # Any folder that keeps a ground truth where a sequence does: its frames are not needed to score.
+        found = next((os.path.join(gt, name) for name in SEQUENCE_GROUND_TRUTH
+                      if os.path.isfile(os.path.join(gt, name))), None)
+        if found is None:
+            raise TrackFileError(f"{clipped(gt)} is a folder without a ground truth: give a ground-truth file, or a "
+                                 f"MOTChallenge sequence folder with {' or '.join(SEQUENCE_GROUND_TRUTH)}")
+        gt = str(found)
+        notes.append(f"{clipped(args.gt)} is a MOTChallenge sequence: scoring against its ground truth {clipped(gt)}")
+    return tracks, gt, notes
 
 
 def register_eval(subparsers: Any) -> None:
@@ -438,8 +626,10 @@ def register_eval(subparsers: Any) -> None:
                     "with flag 0 are not scored, and hypotheses matched to them are dropped. "
                     "MOTP is the mean IoU of the matched pairs. An empty tracks file (a run that found "
                     "nobody) misses every box: MOTA 0, IDF1 0.")
-    p.add_argument("tracks", metavar="TRACKS.txt", help="tracker output, MOTChallenge CSV")
-    p.add_argument("gt", metavar="GT.txt", help="ground truth, MOTChallenge CSV")
+    p.add_argument("tracks", metavar="TRACKS.txt",
+                   help="tracker output, MOTChallenge CSV, or the output folder of a belief track run (its tracks.txt)")
+    p.add_argument("gt", metavar="GT.txt",
+                   help="ground truth, MOTChallenge CSV, or a MOTChallenge sequence folder (its gt/gt.txt)")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_eval)
 
@@ -467,7 +657,16 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     plan = plan_experiment(experiment, workers=args.workers)
     line = (f"{experiment.name}: {len(experiment.sequences)} sequences x {len(experiment.methods)} methods x "
             f"{len(experiment.seeds)} seeds = {len(cells)} runs; outputs in {out}")
+    as_json = getattr(args, "json", False)
+    grid = {"experiment": experiment.name, "sequences": len(experiment.sequences),
+            "methods": len(experiment.methods), "seeds": len(experiment.seeds), "runs": len(cells), "out": str(out),
+            "estimate": {"total_seconds": plan.total_seconds, "wall_seconds": plan.wall_seconds,
+                         "run_seconds": plan.run_seconds, "run_bytes": plan.run_bytes,
+                         "peak_bytes": plan.peak_bytes, "workers": plan.workers}}
     if args.dry_run:
+        if as_json:
+            _print_json({**grid, "cells": [cell.label for cell in cells]})
+            return 0
         print(line)
         print(plan.describe())
         for cell in cells[:DRY_RUN_LISTED]:
@@ -475,10 +674,22 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
         if len(cells) > DRY_RUN_LISTED:
             print(f"  ... and {len(cells) - DRY_RUN_LISTED:,} more")
         return 0
-    # Printed once every argument is checked and the workers are ready: an error is then the only line.
+
+    def announce() -> None:
+        # Printed once every argument is checked and the workers are ready: an error is then the only line.
+        if _quiet(args):
+            return
+        if as_json:     # standard output holds the JSON object alone
+            _say(args, f"{line}; {plan.describe()}")
+        else:
+            print(f"{line}\n{plan.describe()}", flush=True)
+
     result = run_experiment(experiment, out, workers=args.workers, scheduler=args.scheduler, fresh=args.fresh,
-                            progress=not args.no_progress,
-                            announce=lambda: print(f"{line}\n{plan.describe()}", flush=True))
+                            progress=_progress(args), announce=announce)
+    if as_json:
+        _print_json({**grid, "computed": result.computed, "reused": result.reused, "summary": result.summary,
+                     "files": {name: str(path) for name, path in result.files.items()}})
+        return 0
     print(f"ran {result.computed} runs, reused {result.reused} finished ones")
     print(format_summary(result.summary))
     return 0
@@ -499,7 +710,7 @@ def register_experiment(subparsers: Any) -> None:
         "experiment", help="run a grid of seeded tracking runs and tabulate their scores",
         description="Run every cell of a grid (sequences x methods x seeds) described by a TOML file, in parallel "
                     "on local processes or on a Dask cluster, and write results.csv (one row per run: scores and "
-                    "timings), rms.csv (RMS position error per target and frame over the seeds, W (36)) and "
+                    "timings), rms.csv (the RMS position error of W (36), per target and frame over the seeds) and "
                     "summary.csv into --out. Finished runs are kept in --out/cells, so an interrupted experiment "
                     "resumes where it stopped.")
     p.add_argument("config", metavar="CONFIG", help="the experiment's TOML file")
@@ -510,13 +721,16 @@ def register_experiment(subparsers: Any) -> None:
                                                              "(default: one per core)")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="run on the Dask scheduler at ADDRESS (tcp://host:8786), or 'local' for a Dask cluster on "
-                        "this machine (needs belief[dask]). The scheduler runs the runs as pickled Python tasks "
+                        "this machine (needs belief-dsmt[dask]). The scheduler runs the runs as pickled Python tasks "
                         "and sends back pickled results: a scheduler that is not yours can run its own code "
                         "here, so connect only to one you trust")
     p.add_argument("--fresh", action="store_true", help="run every cell again, even the finished ones")
     p.add_argument("--dry-run", action="store_true",
                    help="print the number of runs, their estimated time and memory and the first runs, and stop")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object: the grid, its estimate, and the runs' summary (with --dry-run, the "
+                        "runs' labels)")
     p.add_argument("--max-runs", type=_integer(1), metavar="N", help="most runs of one experiment (default 100000)")
     p.add_argument("--max-sequences", type=_integer(1), metavar="N", help="most sequences (default 1000)")
     p.add_argument("--max-methods", type=_integer(1), metavar="N", help="most methods (default 2000)")

@@ -5,6 +5,7 @@
 sets, the appearance) into a :class:`FrameDiagnostics`.  With ``diagnostics="all"`` it also
 computes what the running strategy does not need, the belief fusion's masses and C's feature
 confidences, on its own parts: nothing it computes goes back into the tracker.
+:data:`QUANTITIES` says in words what each column measures, for the pictures of a run.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from .particles import ParticleSet
 from .weighting import BELIEF_COLUMNS, BeliefWeighting, make_weighting
 
 __all__ = ["FrameDiagnostics", "DiagnosticsCollector", "diagnostic_columns", "FILTER_COLUMNS",
-           "APPEARANCE_COLUMNS"]
+           "APPEARANCE_COLUMNS", "Quantity", "QUANTITIES", "CONFIDENCE_PREFIX"]
 
 #: Diagnostics of every particle filter, per target and frame: the particle count and the
 #: effective sample size of the weights before resampling.
@@ -30,6 +31,69 @@ FILTER_COLUMNS = ("particles", "ess")
 #: Diagnostics of the appearance follow-up: the total similarity ρ_t at the estimate (C (15))
 #: and the occlusion flag ρ_t < T (1 or 0).
 APPEARANCE_COLUMNS = ("similarity", "occluded")
+
+#: The columns of C's feature confidences are ``confidence_<cue>``, one per cue.
+CONFIDENCE_PREFIX = "confidence_"
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """What one diagnostic measures, in words: the title and the y axis of its panel in ``diagnostics.png``.
+
+    Attributes
+    ----------
+    name : str
+        The quantity in words, as a panel's title starts.
+    label : str
+        The equation of the papers that defines it ("W (33)"), or "" when none does; a title
+        gives it after the name.
+    axis : str
+        The y axis: the symbol, what it is averaged over, and its unit or range.
+    bounds : tuple of float or None
+        The range of the quantity when it has one (masses, beliefs, similarities): the panel
+        then shows all of it, so that panels compare at a glance.
+    """
+
+    name: str
+    label: str
+    axis: str
+    bounds: tuple[float, float] | None = None
+
+    @property
+    def title(self) -> str:
+        """The name, then the equation label in brackets when there is one.
+
+        Examples
+        --------
+        >>> QUANTITIES["mean_bel"].title
+        "Belief in the track's own target  (W (35))"
+        >>> QUANTITIES["particles"].title
+        'Particles per track'
+        """
+        return f"{self.name}  ({self.label})" if self.label else self.name
+
+
+#: What each diagnostic column measures, in the order of the panels of ``diagnostics.png``.  The key
+#: ``"confidence"`` stands for every ``confidence_<cue>`` column (one line per cue); ``occluded``
+#: has no panel of its own: it marks the frames on the similarity panel.
+QUANTITIES: dict[str, Quantity] = {
+    "mean_m_target": Quantity("Mass on the track's own target", "W (33)",
+                              "mean m(θj) over the particles (0 to 1)", (0.0, 1.0)),
+    "mean_m_intersection": Quantity("Mass on overlaps with other targets", "W (34)",
+                                    "mean m(θj ∩ …) over the particles (0 to 1)", (0.0, 1.0)),
+    "mean_bel": Quantity("Belief in the track's own target", "W (35)",
+                         "mean Bel(θj) over the particles (0 to 1)", (0.0, 1.0)),
+    "mean_m_empty": Quantity("Conflict left on the empty set", "",
+                             "mean m(∅) over the particles (0 to 1)", (0.0, 1.0)),
+    "mean_r": Quantity("Disagreement between the first two cues", "W (10)",
+                       "mean inconsistency R over the particles (0 to 1)", (0.0, 1.0)),
+    "similarity": Quantity("Appearance similarity to the template", "C (15)",
+                           "total similarity ρt (0 to 1)", (0.0, 1.0)),
+    "confidence": Quantity("Weight of each cue in the adaptive fusion", "C (13)",
+                           "feature confidence λ, mean over tracks (0 to 1)", (0.0, 1.0)),
+    "particles": Quantity("Particles per track", "", "particles (count)"),
+    "ess": Quantity("Effective sample size of the weights", "", "effective sample size (particles)"),
+}
 
 
 def diagnostic_columns(config: TrackerConfig) -> tuple[str, ...]:
@@ -56,7 +120,7 @@ def diagnostic_columns(config: TrackerConfig) -> tuple[str, ...]:
     if config.follows_appearance:
         columns += APPEARANCE_COLUMNS
     if config.fusion == "adaptive" or config.diagnostics == "all":
-        columns += tuple(f"confidence_{name}" for name in config.cues)
+        columns += tuple(f"{CONFIDENCE_PREFIX}{name}" for name in config.cues)
     return columns
 
 

@@ -13,9 +13,13 @@ A source is any of
 * an image pattern with one printf-style number (``img1/%06d.jpg``), counted from 0 or 1
   up to the first missing file;
 * a MOTChallenge sequence folder (one with a ``seqinfo.ini``): its frames are
-  ``imDir/000001`` … ``imDir/<seqLength>`` with the extension ``imExt``, at ``frameRate``;
-  the public detections at ``det/det.txt`` are not used unless they are asked for
-  (:func:`~belief_tracking.detections.read_detections`);
+  ``imDir/000001`` … ``imDir/<seqLength>`` with the extension ``imExt``, at ``frameRate``,
+  or the frames of the video file ``imDir`` names (``imDir=video.avi``); a folder without
+  ``seqinfo.ini`` that holds no image itself but an ``img1`` folder is a sequence too, of
+  the images of ``img1`` at 25 frames per second.  The public detections at ``det/det.txt``
+  are not used unless they are asked for
+  (:func:`~belief_tracking.detections.read_detections`); the ground truth at ``gt/gt.txt``
+  is found by :func:`sequence_ground_truth` (``belief track`` scores against it);
 * a rendered :class:`~belief_tracking.scenes.Scene` or a (T, H, W, 3) ``uint8`` array.
 
 Each is tracked frame by frame from Python as well as by ``belief track``:
@@ -62,7 +66,14 @@ from . import limits
 from .errors import TrackingError, VideoError
 from .limits import shown
 
-__all__ = ["FrameSource", "open_source", "IMAGE_EXTENSIONS"]
+__all__ = ["FrameSource", "open_source", "IMAGE_EXTENSIONS", "is_sequence_folder", "sequence_ground_truth",
+           "sequence_detections", "SEQUENCE_GROUND_TRUTH", "SEQUENCE_DETECTIONS"]
+
+#: Where a MOTChallenge sequence folder keeps its ground truth, tried in this order: the benchmark's place, and the
+#: file beside ``seqinfo.ini`` of a folder that keeps a video and its ground truth together.
+SEQUENCE_GROUND_TRUTH = ("gt/gt.txt", "gt.txt")
+#: Where a MOTChallenge sequence folder keeps its public detections (used only when given as detections).
+SEQUENCE_DETECTIONS = ("det/det.txt", "det.txt")
 
 #: File extensions (lower case) that make a file of a folder a frame.
 IMAGE_EXTENSIONS = (".jpg", ".jpeg", ".jpe", ".png", ".bmp", ".dib", ".tif", ".tiff", ".webp", ".jp2", ".ppm",
@@ -271,11 +282,82 @@ def _listed_images(folder: Path, extensions: Sequence[str] = IMAGE_EXTENSIONS) -
 
 def _image_folder(folder: Path) -> FrameSource:
     files = _listed_images(folder)
+    if not files and (folder / "img1").is_dir():
+        # A MOTChallenge sequence without its seqinfo.ini: the frames of img1, at the default rate.
+        files = _listed_images(folder / "img1")
+        if not files:
+            raise VideoError(f"cannot read the sequence folder {shown(str(folder))}: it has no seqinfo.ini, and "
+                             f"its img1 folder holds no image file ({', '.join(IMAGE_EXTENSIONS[:7])}, ...)")
+        return _images(files, str(folder), "sequence")
     if not files:
-        hint = " (a MOTChallenge sequence folder needs its seqinfo.ini)" if (folder / "img1").is_dir() else ""
         raise VideoError(f"cannot read the folder {shown(str(folder))}: it holds no image file "
-                         f"({', '.join(IMAGE_EXTENSIONS[:7])}, ...){hint}")
+                         f"({', '.join(IMAGE_EXTENSIONS[:7])}, ...)")
     return _images(files, str(folder), "images")
+
+
+def is_sequence_folder(source) -> bool:
+    """Whether ``source`` is a path to a MOTChallenge sequence folder: one with a ``seqinfo.ini``, or with an
+    ``img1`` folder and no image of its own (:func:`open_source` reads both as a sequence).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> is_sequence_folder(folder), is_sequence_folder(np.zeros((1, 2, 2, 3), np.uint8))
+    (False, False)
+    >>> (folder / "img1").mkdir()
+    >>> is_sequence_folder(folder), is_sequence_folder(str(folder))
+    (True, True)
+    """
+    text = limits.path_text(source)
+    if text is None:
+        return False
+    folder = Path(text)
+    try:
+        if not folder.is_dir():
+            return False
+        if os.path.lexists(folder / "seqinfo.ini"):
+            return True
+        return (folder / "img1").is_dir() and not _listed_images(folder)
+    except (OSError, TrackingError):
+        return False
+
+
+def sequence_ground_truth(source) -> Path | None:
+    """The ground-truth file of a MOTChallenge sequence folder, or None (not a sequence folder, or no such file).
+
+    The file is the first of :data:`SEQUENCE_GROUND_TRUTH` (``gt/gt.txt``, then ``gt.txt``) that is a regular
+    file (a link to one included) in the folder.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> (folder / "img1").mkdir()
+    >>> print(sequence_ground_truth(folder))
+    None
+    >>> (folder / "gt").mkdir()
+    >>> _ = (folder / "gt" / "gt.txt").write_text("1,1,10,10,5,10,1\\n")
+    >>> sequence_ground_truth(folder) == folder / "gt" / "gt.txt"
+    True
+    """
+    return _sequence_file(source, SEQUENCE_GROUND_TRUTH)
+
+
+def sequence_detections(source) -> Path | None:
+    """The public detection file of a MOTChallenge sequence folder (:data:`SEQUENCE_DETECTIONS`), or None."""
+    return _sequence_file(source, SEQUENCE_DETECTIONS)
+
+
+def _sequence_file(source, names: Sequence[str]) -> Path | None:
+    if not is_sequence_folder(source):
+        return None
+    folder = Path(limits.path_text(source))
+    for name in names:
+        # os.path.isfile follows links and is False for FIFOs and devices, which a read would block on.
+        if os.path.isfile(folder / name):
+            return folder / name
+    return None
 
 
 #: One printf-style integer conversion of an image pattern, with its flags, width and precision.
@@ -376,8 +458,12 @@ def _sequence(folder: Path) -> FrameSource:
     if len(extension) > 16 or any(c in extension for c in "/\\%\x00"):
         raise VideoError(f"{where}: imExt must be a file extension such as .jpg, got {shown(extension)}")
     images = folder / im_dir
+    if images.is_file():
+        return _sequence_video(folder, images, where, fps if (info.get("frameRate") or "").strip() else None, length,
+                               (width, height) if width is not None and height is not None else None)
     if not images.is_dir():
-        raise VideoError(f"{where}: imDir={limits.clipped(im_dir)} but {shown(str(images))} is not a folder")
+        raise VideoError(f"{where}: imDir={limits.clipped(im_dir)} but {shown(str(images))} is not a folder "
+                         "(of images) or a video file")
     if length is not None:
         files = []
         # One stat a frame, stopping at the first missing one: a seqLength of 10^7 with no frames ends at once.
@@ -392,3 +478,27 @@ def _sequence(folder: Path) -> FrameSource:
             raise VideoError(f"{where}: no {extension} image in {shown(str(images))}")
     size = (width, height) if width is not None and height is not None else None
     return _images(files, str(folder), "sequence", fps=fps, size=size)
+
+
+def _sequence_video(folder: Path, video: Path, where: str, fps: float | None, length: int | None,
+                    size: tuple[int, int] | None) -> FrameSource:
+    """A sequence whose ``imDir`` names a video file: its frames, at the sequence's ``frameRate`` if it gives one.
+
+    ``seqLength``, ``imWidth`` and ``imHeight``, when given, must be the video's.
+    """
+    from .video import VideoReader
+
+    reader = VideoReader(video)
+    try:
+        if size is not None and size != (reader.width, reader.height):
+            raise VideoError(f"{where}: the video {shown(str(video))} is {reader.width}x{reader.height}, but "
+                             f"imWidth and imHeight say {size[0]}x{size[1]}")
+        if length is not None and reader.frame_count and length != reader.frame_count:
+            raise VideoError(f"{where}: seqLength={length} but the video {shown(str(video))} announces "
+                             f"{reader.frame_count} frames")
+    except BaseException:
+        reader.close()
+        raise
+    return FrameSource(reader, name=str(folder), width=reader.width, height=reader.height,
+                       fps=fps if fps is not None else reader.fps, count=reader.frame_count or length,
+                       reader=reader, path=str(video), kind="sequence")

@@ -13,7 +13,7 @@ Some writers only keep what the frames give and write no file: :class:`Timing`,
 :func:`~belief_tracking.runs.run_cell`, uses them as they are).  The others write one of the
 files of :mod:`~belief_tracking.outputs` each: :class:`TracksWriter` (``tracks.txt``),
 :class:`DiagnosticsWriter` (``diagnostics.csv``), :class:`DiagnosticsPlot`
-(``diagnostics.png``), :class:`AnnotatedVideo` (``annotated.avi``, drawn frame by frame),
+(``diagnostics.png``), :class:`~belief_tracking.track_paths.TrackPathsPicture` (``tracks.png``), :class:`AnnotatedVideo` (``annotated.avi``, drawn frame by frame),
 :class:`ExtraFile` (a file of the caller's), :class:`Scoring` (the scores against a ground
 truth, for the summary) and :class:`SummaryWriter` (``summary.json``, last); and
 :class:`ProgressBar` shows the progress.

@@ -40,7 +40,12 @@ def scene_files(tmp_path_factory):
 
 @pytest.fixture
 def quick_plot(monkeypatch):
-    """diagnostics.png as a stub: drawing the real one costs seconds and is tested with the demo."""
-    from belief_tracking import outputs
+    """diagnostics.png and tracks.png as stubs: drawing the real ones costs seconds and is tested with the demo
+    and in tests/video_tracking/test_pictures.py."""
+    from belief_tracking import outputs, track_paths
 
-    monkeypatch.setattr(outputs, "plot_diagnostics", lambda path, *args, **kwargs: Path(path).write_bytes(b"png"))
+    def stub(path, *args, **kwargs):
+        Path(path).write_bytes(b"png")
+
+    monkeypatch.setattr(outputs, "plot_diagnostics", stub)
+    monkeypatch.setattr(track_paths, "plot_track_paths", stub)

@@ -237,8 +237,9 @@ def test_an_output_folder_holds_the_files_of_its_latest_run_only(tmp_path, plan,
     (out / "annotated").mkdir()
     config = TrackerConfig(particles=10)
     run(frames_with_a_red_block(), plan, config, out, progress=False, force=True)
-    assert {p.name for p in out.iterdir()} == {"tracks.txt", "diagnostics.csv", "diagnostics.png", "annotated.avi",
-                                               "summary.json", "notes.txt", "annotated", ".belief-outputs.json"}
+    assert {p.name for p in out.iterdir()} == {"tracks.txt", "diagnostics.csv", "diagnostics.png", "tracks.png",
+                                               "annotated.avi", "summary.json", "notes.txt", "annotated",
+                                               ".belief-outputs.json"}
     run(frames_with_a_red_block(), plan, config, out, progress=False, write_video=False, write_plot=False,
         force=True)
     assert {p.name for p in out.iterdir()} == {"tracks.txt", "diagnostics.csv", "summary.json", "notes.txt",

@@ -453,7 +453,7 @@ def test_a_scheduler_without_dask_names_the_extra(tmp_path, monkeypatch):
     import sys
 
     monkeypatch.setitem(sys.modules, "distributed", None)     # import distributed -> ImportError
-    with pytest.raises(ExperimentError, match=r'needs the dask extra: pip install "belief\[dask\]"'):
+    with pytest.raises(ExperimentError, match=r"needs the dask extra: pip install 'belief-dsmt\[dask\]'"):
         run_experiment(experiment_from_mapping(SMALL), tmp_path, scheduler="tcp://127.0.0.1:8786", progress=False)
     assert not list((tmp_path / "cells").glob("*.json"))
 

@@ -44,7 +44,7 @@ def test_the_library_imports_and_combines_without_the_extra():
 
 
 def test_require_names_the_extra_and_is_both_a_belief_error_and_an_import_error():
-    with pytest.raises(MissingExtraError, match=r"pip install 'belief\[tracking\]'") as caught:
+    with pytest.raises(MissingExtraError, match=r"pip install 'belief-dsmt\[tracking\]'") as caught:
         require("a_package_that_is_not_installed")
     assert isinstance(caught.value, ModuleNotFoundError)
     assert caught.value.name == "a_package_that_is_not_installed"

@@ -70,8 +70,8 @@ def test_a_truncated_video_keeps_the_decoded_frames_and_exits_1_in_one_line(tmp_
     assert 1 <= decoded < 12 and summary["expected_frames"] == 12 and summary["complete"] is False
     assert f"decoded {decoded} of the 12 frames" in line and str(out) in line
     assert f"tracked {decoded} frames" in stdout
-    assert {p.name for p in out.iterdir()} == {"tracks.txt", "diagnostics.csv", "diagnostics.png", "summary.json",
-                                               ".belief-outputs.json"}
+    assert {p.name for p in out.iterdir()} == {"tracks.txt", "diagnostics.csv", "diagnostics.png", "tracks.png",
+                                               "summary.json", ".belief-outputs.json"}
     tracks = np.loadtxt(out / "tracks.txt", delimiter=",", ndmin=2)
     assert tracks[:, 0].max() <= decoded
 

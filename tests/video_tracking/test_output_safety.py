@@ -115,7 +115,7 @@ def test_force_replaces_the_runs_own_names_and_leaves_every_other_file(tmp_path,
     assert np.loadtxt(out / "tracks.txt", delimiter=",").shape == (4, 10)
     # The message names the files written, and only those.
     assert stdout.splitlines()[0].endswith(f"outputs in {out}: tracks.txt, diagnostics.csv, diagnostics.png, "
-                                           "summary.json")
+                                           "tracks.png, summary.json")
 
 
 def test_a_run_may_write_again_where_runs_wrote_but_not_over_an_edited_file(tmp_path, capsys, video, quick_plot):
@@ -138,8 +138,8 @@ def test_a_run_with_no_video_removes_the_video_of_the_run_before_only(tmp_path, 
     argv = ["track", source, "--init", boxes, "--out", out, "--particles", "10", "--no-progress"]
     assert belief(capsys, *argv)[0] == 0 and (out / "annotated.avi").is_file()
     assert belief(capsys, *argv, "--no-video")[0] == 0
-    assert {p.name for p in out.iterdir()} == {"tracks.txt", "diagnostics.csv", "diagnostics.png", "summary.json",
-                                               MANIFEST}
+    assert {p.name for p in out.iterdir()} == {"tracks.txt", "diagnostics.csv", "diagnostics.png", "tracks.png",
+                                               "summary.json", MANIFEST}
 
 
 # -- inputs in --out -----------------------------------------------------------------------------------

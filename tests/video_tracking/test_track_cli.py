@@ -14,8 +14,8 @@ from belief_tracking import scenes
 from belief_tracking.cli import AUTOMATIC_WARM_UP, SCORES_EXPLAINED, register
 from belief_tracking.errors import TrackingError
 
-OUTPUTS = {"tracks.txt", "diagnostics.csv", "diagnostics.png", "summary.json", "annotated.avi", "gt.txt", "scene.avi",
-           ".belief-outputs.json"}
+OUTPUTS = {"tracks.txt", "diagnostics.csv", "diagnostics.png", "tracks.png", "summary.json", "annotated.avi", "gt.txt",
+           "scene.avi", ".belief-outputs.json"}
 DATA = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "pets09_s2l1_f0001_0200"
 
 
@@ -72,8 +72,8 @@ def test_track_with_boxes_file(tmp_path):
     out = tmp_path / "out"
     assert track([str(video), "--init", str(boxes), "--out", str(out), "--particles", "20", "--no-video",
                   "--no-progress"]) == 0
-    assert {p.name for p in out.iterdir()} == {"tracks.txt", "diagnostics.csv", "diagnostics.png", "summary.json",
-                                               ".belief-outputs.json"}
+    assert {p.name for p in out.iterdir()} == {"tracks.txt", "diagnostics.csv", "diagnostics.png", "tracks.png",
+                                               "summary.json", ".belief-outputs.json"}
     tracks = np.loadtxt(out / "tracks.txt", delimiter=",")
     assert tracks.shape == (5, 10) and set(tracks[:, 1]) == {3}
 
@@ -338,5 +338,5 @@ def test_a_run_without_video_removes_the_video_of_the_run_before(tmp_path, quick
     assert (out / "annotated.avi").is_file()
     (out / "my_notes.txt").write_text("mine")
     assert track([*argv, "--no-video", "--force"]) == 0
-    assert {p.name for p in out.iterdir()} == {"tracks.txt", "diagnostics.csv", "diagnostics.png", "summary.json",
-                                               "my_notes.txt", ".belief-outputs.json"}
+    assert {p.name for p in out.iterdir()} == {"tracks.txt", "diagnostics.csv", "diagnostics.png", "tracks.png",
+                                               "summary.json", "my_notes.txt", ".belief-outputs.json"}

@@ -188,4 +188,4 @@ def test_a_run_returns_what_its_writers_kept(tmp_path, short_scene, quick_plot):
     assert summary.scores.to_dict() == written["scores"]
     with open(summary.files["diagnostics.csv"], encoding="ascii") as handle:
         assert len(summary.diagnostics) == len(handle.readlines()) - 1 > 0
-    assert list(summary.files) == ["tracks.txt", "diagnostics.csv", "diagnostics.png", "summary.json"]
+    assert list(summary.files) == ["tracks.txt", "diagnostics.csv", "diagnostics.png", "tracks.png", "summary.json"]
