@@ -270,6 +270,39 @@ def _queries(m: MassFunction, given: Sequence[str] | None) -> list[str]:
     return [str(e) for e in m.focal]
 
 
+#: How many pairs of hypotheses the overlap note looks at (it names the first few it finds).
+_OVERLAP_PAIRS_CHECKED = 2_000
+
+
+def _overlap_note(m: MassFunction, queries: Sequence[str], what: str) -> None:
+    """Say why the probabilities of the queried hypotheses may sum to more than one: they overlap."""
+    model, frame = m.model, m.frame
+    names = [q for q in queries if q in frame._index]
+    if model.kind == "shafer" or len(names) < 2:
+        return
+    shared = []
+    for k, (a, b) in enumerate((a, b) for i, a in enumerate(names) for b in names[i + 1:]):
+        if k >= _OVERLAP_PAIRS_CHECKED or len(shared) > 3:
+            break
+        if not model.is_empty(frame.element(f"{a}&{b}")):
+            shared.append(f"{a}∩{b}")
+    if shared:
+        listed = ", ".join(shared[:3]) + (", ..." if len(shared) > 3 else "")
+        _note(f"{what} of the hypotheses need not sum to 1: under the {model.kind} model they overlap ({listed} "
+              "not empty), and a region they share counts for each of them")
+
+
+def _empty_queries_note(m: MassFunction, queries: Sequence[str]) -> list[str]:
+    """The queries as the table shows them, an empty one marked "= ∅", with a note naming those."""
+    empty = [q for q in queries if m.model.is_empty(m.frame.element(q))]
+    if not empty:
+        return list(queries)
+    _note(f"{', '.join(empty[:3])}{', ...' if len(empty) > 3 else ''} {'is' if len(empty) == 1 else 'are'} empty "
+          f"under the {m.model.kind} model: Bel, Pls and BetP of ∅ are 0 and its commonality q(∅) is 1")
+    marked = set(empty)
+    return [f"{q} (= ∅)" if q in marked else q for q in queries]
+
+
 def _cmd_measures(args: argparse.Namespace) -> int:
     m = _read_bba(args.bba)
     queries = _queries(m, args.query)
@@ -279,8 +312,10 @@ def _cmd_measures(args: argparse.Namespace) -> int:
     if args.json:
         _print_json({q: {name: columns[name][i] for name in columns} for i, q in enumerate(queries)})
     else:
-        rows = [[q] + [columns[name][i] for name in columns] for i, q in enumerate(queries)]
+        shown = _empty_queries_note(m, queries) if args.query else queries   # focal elements are never empty
+        rows = [[q] + [columns[name][i] for name in columns] for i, q in enumerate(shown)]
         print(_table(["proposition", "bel", "pls", "q", "betp"], rows))
+    _overlap_note(m, queries, "BetP")
     return 0
 
 
@@ -332,6 +367,7 @@ def _cmd_transform(args: argparse.Namespace) -> int:
         else:
             label = "BetP" if args.pignistic else f"DSmP(ε={args.dsmp:g})"
             print(_table(["proposition", label], list(probability.items())))
+        _overlap_note(m, names, "BetP" if args.pignistic else "DSmP")
         return 0
     if args.query:
         raise CommandError("belief transform: error: --query goes with --pignistic or --dsmp")
@@ -693,7 +729,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("combine", help="combine BBA files with a rule",
                        description="Combine two or more mass functions with a combination rule.")
     p.add_argument("bba", nargs="+", metavar="BBA.json", help="the sources (at least two), all under one model")
-    p.add_argument("--rule", required=True, metavar="RULE", help="a rule name (see 'belief rules')")
+    p.add_argument("--rule", default="dempster", metavar="RULE",
+                   help="a rule name (see 'belief rules'); Dempster's rule by default, as combine() in Python")
     p.add_argument("--model", metavar="MODEL.json", help="fusion model (default: the sources' model)")
     p.add_argument("--r-mode", choices=["paper", "euclid", "jousselme"], help="r_rule: how R is measured")
     p.add_argument("--empty-mode", choices=["union", "empty"], help="r_rule: where R·k goes when A∩B is empty")
