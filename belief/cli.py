@@ -277,7 +277,7 @@ _OVERLAP_PAIRS_CHECKED = 2_000
 def _overlap_note(m: MassFunction, queries: Sequence[str], what: str) -> None:
     """Say why the probabilities of the queried hypotheses may sum to more than one: they overlap."""
     model, frame = m.model, m.frame
-    names = [q for q in queries if q in frame._index]
+    names = [q for q in queries if q in frame]
     if model.kind == "shafer" or len(names) < 2:
         return
     shared = []
