@@ -161,7 +161,7 @@ def _describe_model(model: Model) -> str:
 def _describe_source(path: str, m: MassFunction) -> str:
     where = "standard input" if path == STDIN else path
     names = ", ".join(m.frame.hypotheses[:8]) + (", ..." if len(m.frame) > 8 else "")
-    return (f"{where}: {len(m.focal)} focal element{'s' if len(m.focal) != 1 else ''} on a frame of "
+    return (f"{where}: {len(m)} focal element{'s' if len(m) != 1 else ''} on a frame of "
             f"{len(m.frame)} hypotheses ({names}) under {_describe_model(m.model)}")
 
 
@@ -192,7 +192,7 @@ def _table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
     widths = [max(map(len, column)) for column in columns]
     if len(columns) == 2:                   # a right-aligned last column leaves nothing to strip
         left, right = widths
-        lines = [a.ljust(left) + "  " + b.rjust(right) for a, b in zip(*columns)]
+        lines = list(map(f"{{:<{left}}}  {{:>{right}}}".format, *columns))
     else:
         padded = [[c.ljust(widths[0]) for c in columns[0]]] + [[c.rjust(w) for c in column]
                                                                for column, w in zip(columns[1:], widths[1:])]
@@ -202,9 +202,16 @@ def _table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
 
 
 def _cells(column: Sequence[Any]) -> list[str]:
-    if all(type(c) is float for c in column):
-        return [f"{c:.6f}" for c in column]
+    # One builtin over the whole column where its cells are all of one kind.
+    kinds = set(map(type, column))
+    if kinds == {float}:
+        return list(map(_SIX_DECIMALS, column))
+    if kinds == {str}:
+        return list(column)
     return [_fmt(c) for c in column]
+
+
+_SIX_DECIMALS = "{:.6f}".format
 
 
 def _fmt(value: Any) -> str:
@@ -409,7 +416,8 @@ def _cmd_combine(args: argparse.Namespace) -> int:
         _note(f"the model has no empty intersection (the free DSm model), so {info.name} has no conflict to "
               "redistribute and gives the conjunctive rule's result; for exclusive hypotheses give --model shafer, "
               'or "model": {"type": "shafer"} in the BBA files')
-    _detail(f"result: {len(result.focal)} focal element{'s' if len(result.focal) != 1 else ''}")
+    if _voice["level"] > 0:             # len(m) counts without making the focal elements
+        _detail(f"result: {len(result)} focal element{'s' if len(result) != 1 else ''}")
     _print_mass(result, args.json)
     return 0
 
@@ -471,7 +479,8 @@ _TABLE_ADVICE = {"measures": "ask for fewer queries (--query PROP ...)",
 def _run_measuring(args: argparse.Namespace) -> int:
     """Run a measuring command with the table limits its options set; a refusal names the option."""
     with _option_limits(args, TABLE_LIMIT_FLAGS, {"ask for fewer queries": _TABLE_ADVICE.get(args.command)}):
-        _detail(_limits_in_effect(TABLE_LIMIT_FLAGS))
+        if _voice["level"] > 0:
+            _detail(_limits_in_effect(TABLE_LIMIT_FLAGS))
         return args.measuring(args)
 
 
@@ -797,7 +806,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Fuse the evidence of an embedded example and print the results.")
     p.set_defaults(func=_cmd_demo)
 
-    for ep in entry_points(group=ENTRY_POINT_GROUP):
+    for ep in _command_plugins():
         try:
             ep.load()(sub)
         except Exception as exc:  # a broken plugin must not break the core commands
@@ -807,6 +816,18 @@ def build_parser() -> argparse.ArgumentParser:
     for command in {id(c): c for c in sub.choices.values()}.values():
         _verbosity_options(command, main_parser=False)
     return parser
+
+
+def _command_plugins() -> list:
+    """The entry points of the command plugins, each named target once.
+
+    An environment that held this project under an earlier distribution name lists the same entry points twice
+    (once per distribution's metadata); loading both would register each command twice.
+    """
+    unique = {}
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        unique.setdefault((ep.name, ep.value), ep)
+    return list(unique.values())
 
 
 def _verbosity_options(parser: argparse.ArgumentParser, main_parser: bool) -> None:

@@ -18,6 +18,7 @@ canonical form under constraints.
 
 from __future__ import annotations
 
+import operator
 import re
 import unicodedata
 import weakref
@@ -394,6 +395,23 @@ class Frame:
         if mask.bit_count() == 1:
             return self._names[mask.bit_length() - 1]
         return "|".join([self._names[i] for i in _bits(mask)])
+
+    def union_names(self, masks: Sequence[int]) -> list[str]:
+        """:meth:`union_name` of each mask; masks that are the frame's own hypothesis bits are named at once.
+
+        >>> frame = Frame(["a", "b", "c"])
+        >>> frame.union_names([frame.bits[2], 0b011, 0])
+        ['c', 'a|b', 'empty']
+        """
+        lengths = list(map(int.bit_length, masks))
+        # By identity, as Frame.singleton_of_bit: a hypothesis's own bit needs no reading of its bits.
+        own = (None, *self._bit.values())
+        try:
+            if all(map(operator.is_, map(own.__getitem__, lengths), masks)):
+                return list(map(self._names.__getitem__, [length - 1 for length in lengths]))
+        except IndexError:              # a mask beyond the frame: union_name says what it is
+            pass
+        return list(map(self.union_name, masks))
 
     def term(self, text: str) -> int:
         """Parse a single conjunction (``a&b``) into its mask."""

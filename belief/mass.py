@@ -472,7 +472,7 @@ class MassFunction(_MassSlots):
             # Unions of hypotheses print from their masks: no element need be made.
             masks, floats = self._union_masks(), self._union_floats()
             if self._focal is None:
-                return dict(zip(map(self.model.frame.union_name, masks), floats))
+                return dict(zip(self.model.frame.union_names(masks), floats))
         return {str(e): v for e, v in zip(self.focal, self.values.tolist())}
 
     def __repr__(self) -> str:
@@ -641,7 +641,7 @@ class MassFunction(_MassSlots):
             if key not in data:
                 raise FormatError(f"the BBA has no \"{key}\"")
         names = data["frame"]
-        if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        if not isinstance(names, list) or set(map(type, names)) - {str} and not all(isinstance(n, str) for n in names):
             raise FormatError("\"frame\" must be a list of hypothesis names")
         frame = Frame(names)
         model = Model.from_dict(frame, data.get("model"))

@@ -198,6 +198,7 @@ def test_plugin_entry_points_are_registered(monkeypatch, capsys):
 
     class FakeEntryPoint:
         name = "fake"
+        value = "fake_plugin:register"
 
         @staticmethod
         def load():
@@ -208,6 +209,7 @@ def test_plugin_entry_points_are_registered(monkeypatch, capsys):
 
     class Broken:
         name = "broken"
+        value = "broken_plugin:register"
 
         @staticmethod
         def load():
@@ -217,6 +219,30 @@ def test_plugin_entry_points_are_registered(monkeypatch, capsys):
     code, out, err = run(capsys, "hello")
     assert code == 0 and out.strip() == "hello from a plugin"
     assert "plugin 'broken' could not be loaded" in err
+
+
+def test_a_plugin_listed_by_two_distributions_is_registered_once(monkeypatch, capsys):
+    # An environment that still holds the project under an earlier distribution name lists each entry point twice.
+    import belief.cli as cli
+
+    class OldName:
+        name = "hello"
+        value = "hello_plugin:register"
+
+        @staticmethod
+        def load():
+            def register(sub):
+                p = sub.add_parser("hello")
+                p.set_defaults(func=lambda args: print("hello from a plugin") or 0)
+            return register
+
+    class NewName(OldName):
+        pass
+
+    monkeypatch.setattr(cli, "entry_points", lambda group: [OldName, NewName] if group == cli.ENTRY_POINT_GROUP else [])
+    code, out, err = run(capsys, "hello")
+    assert code == 0 and out.strip() == "hello from a plugin"
+    assert err == ""
 
 
 # -- combine and rules ------------------------------------------------------------------------------

@@ -31,6 +31,7 @@ from .initiation import InitiationConfig, InitPlan
 from .motfiles import check_ground_truth, read_mot
 from .outdir import OutputFolder, input_paths
 from .sources import FrameSource, open_source
+from .track_paths import TrackPathsPicture
 from .tracker import Tracker
 from .writers import (
     AnnotatedVideo,
@@ -98,12 +99,16 @@ class Summary:
 def output_names(write_video: bool = True, write_plot: bool = True, extra: tuple[str, ...] | dict = ()) -> tuple[str, ...]:
     """The names of the files a :func:`run` writes, ``summary.json`` last.
 
+    ``write_plot`` false leaves out both pictures, ``diagnostics.png`` and ``tracks.png``.
+
     Examples
     --------
     >>> output_names(write_video=False, extra=("gt.txt",))
-    ('tracks.txt', 'diagnostics.csv', 'diagnostics.png', 'gt.txt', 'summary.json')
+    ('tracks.txt', 'diagnostics.csv', 'diagnostics.png', 'tracks.png', 'gt.txt', 'summary.json')
+    >>> output_names(write_plot=False)
+    ('tracks.txt', 'diagnostics.csv', 'annotated.avi', 'summary.json')
     """
-    left = {"annotated.avi": write_video, "diagnostics.png": write_plot}
+    left = {"annotated.avi": write_video, **{name: write_plot for name in outputs.PICTURES}}
     names = [name for name in outputs.RUN_OUTPUTS if left.get(name, True) and name != "summary.json"]
     return (*names, *extra, "summary.json")
 
@@ -132,8 +137,8 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(),
         With ``config.warm_up`` > 0 the background model first learns from that many frames
         spread over the whole source (a video file is then decoded twice).
     out_dir : path or OutputFolder
-        Receives ``tracks.txt``, ``diagnostics.csv``, ``diagnostics.png`` (unless
-        ``write_plot`` is false), ``annotated.avi`` (unless ``write_video`` is false), the
+        Receives ``tracks.txt``, ``diagnostics.csv``, ``diagnostics.png`` and ``tracks.png``
+        (unless ``write_plot`` is false), ``annotated.avi`` (unless ``write_video`` is false), the
         ``extra_outputs`` and ``summary.json``, written last (:func:`output_names`).  It is
         checked before any work (:class:`~belief_tracking.outdir.OutputFolder`): refused if it
         is, lies inside or holds the source or the ground-truth file, or, unless ``force``,
@@ -151,7 +156,9 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(),
     extra_outputs : dict of str to callable, optional
         Further files ``name -> write(path)``, committed with the others.
     write_plot : bool
-        Draw ``diagnostics.png``.
+        Draw the pictures: ``diagnostics.png`` (the diagnostics over the frames) and
+        ``tracks.png`` (every track's path over the middle frame,
+        :mod:`~belief_tracking.track_paths`).
     detections : Detections, optional
         A detector's boxes by frame (:func:`~belief_tracking.detections.read_detections`),
         given to the tracker frame by frame; the summary records their source.  Detections
@@ -292,6 +299,8 @@ def _writers(staged: OutputFolder, frames: FrameSource, config: TrackerConfig, t
         writers.append(DiagnosticsPlot(staged.path("diagnostics.png"), diagnostics,
                                        title=f"{frames.name}: {config.describe()}",
                                        threshold=config.adaptive_fusion.threshold))
+        writers.append(TrackPathsPicture(staged.path("tracks.png"), tracks, (frames.width, frames.height),
+                                         expected_frames=frames.count, title=frames.name))
     writers.append(ProgressBar(frames.count, show=progress))
     writers += [ExtraFile(staged.path(name), write) for name, write in extra_outputs.items()]
     if scoring is not None:

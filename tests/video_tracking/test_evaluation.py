@@ -496,6 +496,7 @@ def test_belief_cli_runs_eval_through_the_entry_point(files, monkeypatch, capsys
 
     class EvalEntryPoint:
         name = "eval"
+        value = "belief_tracking.cli:register_eval"
 
         @staticmethod
         def load():
