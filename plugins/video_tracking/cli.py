@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import Any
 from .defaults import AUTOMATIC_WARM_UP
 from .extras import require
+from .labels import LABELS_NOTE
 
 __all__ = ["register", "register_eval", "register_experiment", "AUTOMATIC_WARM_UP", "parse_setting"]
 
@@ -482,7 +483,7 @@ def register(subparsers: Any) -> None:
     ('v.avi', 'boxes.csv', 30, 0, None)
     """
     p = subparsers.add_parser("track", help="track people in a video with the DSmT multi-cue particle filter",
-                              description=TRACK_DESCRIPTION)
+                              description=TRACK_DESCRIPTION, epilog=LABELS_NOTE + ".")
     _add_track_inputs(p)
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")
     p.add_argument("--seed", type=_integer(0), default=0, metavar="S", help="random seed (default 0)")
@@ -712,7 +713,7 @@ def register_experiment(subparsers: Any) -> None:
                     "on local processes or on a Dask cluster, and write results.csv (one row per run: scores and "
                     "timings), rms.csv (the RMS position error of W (36), per target and frame over the seeds) and "
                     "summary.csv into --out. Finished runs are kept in --out/cells, so an interrupted experiment "
-                    "resumes where it stopped.")
+                    "resumes where it stopped.", epilog=LABELS_NOTE + ".")
     p.add_argument("config", metavar="CONFIG", help="the experiment's TOML file")
     p.add_argument("--out", metavar="DIR", help="output folder (default: CONFIG without its suffix)")
     p.add_argument("--data", metavar="DIR", help="folder of the relative video and gt paths (default: CONFIG's "

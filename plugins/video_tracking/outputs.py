@@ -31,6 +31,7 @@ import numpy as np
 
 from .diagnostics import CONFIDENCE_PREFIX, QUANTITIES, Quantity
 from .extras import require
+from .labels import LABELS_NOTE
 
 if TYPE_CHECKING:  # pragma: no cover - annotations only: matplotlib is imported when a picture is drawn
     from matplotlib.figure import Figure
@@ -95,9 +96,6 @@ def _json_ready(value: Any) -> Any:
     return value
 
 
-#: Where a reader finds what the equation labels of the titles stand for.
-LABELS_NOTE = ("Labels such as W (33) are equation numbers of the papers the tracker follows: W = Wang et al. 2013, "
-               "C = Cao & Xuan 2014 (docs/theory.md, References)")
 
 
 @dataclass(frozen=True)

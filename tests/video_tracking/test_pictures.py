@@ -282,3 +282,21 @@ def test_the_help_of_belief_track_names_each_quantity_before_its_label():
 def test_the_docs_link_the_labels_to_their_list():
     for page in ("docs/tracking.md", "docs/plots.md"):
         assert "theory.md#references" in (ROOT / page).read_text(encoding="utf-8"), page
+
+
+@pytest.mark.parametrize("command", ["track", "experiment", "eval", "combine", "decide", "transform", "measures"])
+def test_help_names_each_quantity_before_its_equation_label_and_says_where_labels_are_explained(command, capsys):
+    # A label such as "W (33)" is read only after the quantity's name, and the help says what W and C stand for.
+    import re
+
+    from belief.cli import main
+
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    labels = list(re.finditer(r"\b[WC] \(\d+\)", text))
+    for label in labels:
+        before = text[:label.start()].rstrip(" (")
+        assert re.search(r"[a-z]{4,}( of| such as)?$", before), f"{label.group()} follows no quantity's name: ...{before[-40:]}"
+    if labels:
+        assert "docs/theory.md" in text and "Wang" in text
