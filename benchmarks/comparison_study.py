@@ -409,6 +409,9 @@ def render_page(experiment, result, summary: dict, sequences: list[str], methods
         "standard deviations over the seeds) and [rms.csv](results/rms.csv) (RMS position error per target and "
         "frame, W (36)).",
         "",
+        "Equation labels such as W (33) follow the quantity they name and point to the papers listed under "
+        "[References](theory.md#references).",
+        "",
         "## Set-up",
         "",
         "- **Sequences.** PETS 2009 S2.L1, frames 1–200 (real video, up to 8 people), and four synthetic scenes "
