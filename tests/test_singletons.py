@@ -318,3 +318,29 @@ def test_dsmp_names_the_focal_element_where_it_is_undefined():
     m = MassFunction({"e0|e1": 0.5, **{name: 0.5 / 298 for name in names[2:]}}, model=model)
     with pytest.raises(UndefinedTransformError, match=r"focal element e0\|e1 holds no mass of DSm cardinality one"):
         m.batch().dsmp(model.frame.singletons, epsilon=0.0)
+
+
+@pytest.mark.parametrize("n", [1, 2, 65, 66, 2049, 4099])
+def test_the_pcr_pair_table_gives_the_bits_of_sums_and_quotients_written_out(n):
+    # The block kernel forms a_i + b_j as a small matrix product: it must give the bits of the sums written out,
+    # on block edges too (n above PCR_BLOCK_ENTRIES // rows), with zero masses and the pairs (i, i) left out.
+    rng = np.random.default_rng(n)
+    a, b = rng.random(n) ** 4, rng.random(n) ** 4
+    a[rng.random(n) < 0.2] = 0.0
+    b[rng.random(n) < 0.2] = 0.0
+    a[0] = b[-1] = 1.0                              # something live in each
+    a, b = a / a.sum(), b / b.sum()
+    live_a, live_b = np.flatnonzero(a), np.flatnonzero(b)
+    x, y = a[live_a], b[live_b]
+    reciprocal = 1.0 / np.add.outer(x, y)
+    reciprocal[live_a[:, None] == live_b[None, :]] = 0.0
+    step = max(1, singletons.PCR_BLOCK_ENTRIES // len(y))     # the kernel's blocks: its order of additions
+    to_a, to_b = np.empty(len(x)), np.zeros(len(y))
+    for start in range(0, len(x), step):
+        rows = slice(start, start + step)
+        to_a[rows] = reciprocal[rows] @ y
+        to_b += x[rows] @ reciprocal[rows]
+    expected = a * b
+    expected[live_a] += x * (x * to_a)
+    expected[live_b] += y * (y * to_b)
+    assert np.array_equal(singletons._pcr_pair(a, b), expected)
