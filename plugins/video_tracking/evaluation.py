@@ -1,4 +1,4 @@
-"""Scoring tracks against ground truth: CLEAR MOT (MOTA, MOTP), IDF1, centre errors and identity swaps.
+"""Scoring tracks against ground truth: CLEAR MOT (MOTA, MOTP), IDF1, HOTA, centre errors and identity swaps.
 
 Tracks and ground truth are MOTChallenge rows (read by
 :func:`~belief_tracking.motfiles.read_mot`): one box per row,
@@ -13,7 +13,11 @@ in pixels.  :func:`evaluate` follows the usual MOTChallenge protocol:
   hypotheses are scored against the flagged-in ground truth only;
 * the frame-by-frame correspondences, identity switches, misses and false positives are
   those of ``motmetrics.MOTAccumulator``, and the summary numbers come from
-  ``motmetrics.metrics``.
+  ``motmetrics.metrics``;
+* HOTA and its parts (DetA, AssA, LocA, DetRe, DetPr, AssRe, AssPr) are TrackEval's, means over
+  the IoU thresholds α = 0.05, …, 0.95 (:mod:`~belief_tracking.hota`): flag-0 rows are not
+  scored there either, but, as in TrackEval with every row a pedestrian, the hypotheses on
+  them are kept (they count as false positives of HOTA).
 
 The IoU distances are computed here, not with ``motmetrics.distances.iou_matrix``: the
 released motmetrics 1.4.0 calls ``np.asfarray``, which NumPy 2 removed.
@@ -34,9 +38,10 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .boxes import check_boxes, intersections, iou
+from .boxes import check_boxes, checked_iou, iou
 from .errors import TrackingError
 from .extras import require
+from .hota import HOTA_FIELDS, hota
 from .motfiles import MAX_COORDINATE, MAX_FRAME
 
 __all__ = [
@@ -120,6 +125,15 @@ class Scores:
         1 is perfect.
     idf1 : float
         Identity F1 score of the global one-to-one id assignment (Ristani et al. 2016).
+    hota, deta, assa, loca, detre, detpr, assre, asspr : float
+        HOTA (higher-order tracking accuracy, ``sqrt(DetA · AssA)``), detection accuracy,
+        association accuracy, localisation accuracy (mean IoU of the true positives),
+        detection recall and precision, association recall and precision (Luiten et al.
+        2021): each the mean over α = 0.05, 0.10, …, 0.95 of its value at IoU threshold α,
+        as TrackEval computes them (:func:`~belief_tracking.hota.hota`).  Scored on the
+        flagged-in ground truth and on *every* hypothesis box (``ignored_predictions``
+        included, as TrackEval keeps them).  Without any hypothesis all are 0 but LocA,
+        which TrackEval sets to 1 where nothing is matched.
     precision, recall : float
         ``matched_pairs / num_predictions`` and ``matched_pairs / num_objects``.
     id_switches : int
@@ -145,6 +159,14 @@ class Scores:
     mota: float
     motp: float
     idf1: float
+    hota: float
+    deta: float
+    assa: float
+    loca: float
+    detre: float
+    detpr: float
+    assre: float
+    asspr: float
     precision: float
     recall: float
     id_switches: int
@@ -186,23 +208,31 @@ class Scores:
         --------
         >>> gt = np.array([[1, 1, 0, 0, 10, 10, 1]])
         >>> print(evaluate(gt, gt).format_table())
-        metric                       value
-        --------------------------  ------
-        MOTA                        1.0000
-        MOTP (mean IoU of matches)  1.0000
-        IDF1                        1.0000
-        precision                   1.0000
-        recall                      1.0000
-        ID switches                      0
-        false positives                  0
-        false negatives (misses)         0
-        matched pairs                    1
-        ground-truth boxes               1
-        hypothesis boxes                 1
-        ignored hypothesis boxes         0
-        frames                           1
-        mean centre error (px)      0.0000
-        median centre error (px)    0.0000
+        metric                                  value
+        -------------------------------------  ------
+        MOTA                                   1.0000
+        MOTP (mean IoU of matches)             1.0000
+        IDF1                                   1.0000
+        HOTA (higher-order tracking accuracy)  1.0000
+        DetA (detection accuracy)              1.0000
+        AssA (association accuracy)            1.0000
+        LocA (localisation accuracy)           1.0000
+        DetRe (detection recall)               1.0000
+        DetPr (detection precision)            1.0000
+        AssRe (association recall)             1.0000
+        AssPr (association precision)          1.0000
+        precision                              1.0000
+        recall                                 1.0000
+        ID switches                                 0
+        false positives                             0
+        false negatives (misses)                    0
+        matched pairs                               1
+        ground-truth boxes                          1
+        hypothesis boxes                            1
+        ignored hypothesis boxes                    0
+        frames                                      1
+        mean centre error (px)                 0.0000
+        median centre error (px)               0.0000
         """
         rows = [(_LABELS[f.name], _format_value(getattr(self, f.name))) for f in fields(self)]
         header = ("metric", "value")
@@ -217,6 +247,14 @@ _LABELS = {
     "mota": "MOTA",
     "motp": "MOTP (mean IoU of matches)",
     "idf1": "IDF1",
+    "hota": "HOTA (higher-order tracking accuracy)",
+    "deta": "DetA (detection accuracy)",
+    "assa": "AssA (association accuracy)",
+    "loca": "LocA (localisation accuracy)",
+    "detre": "DetRe (detection recall)",
+    "detpr": "DetPr (detection precision)",
+    "assre": "AssRe (association recall)",
+    "asspr": "AssPr (association precision)",
     "precision": "precision",
     "recall": "recall",
     "id_switches": "ID switches",
@@ -297,9 +335,7 @@ class _Matching(NamedTuple):
 
 def _distances(gt_boxes: np.ndarray, hyp_boxes: np.ndarray, max_iou_distance: float) -> np.ndarray:
     """:func:`iou_distance` of boxes already checked (the same floats, without checking every frame again)."""
-    inter = intersections(gt_boxes, hyp_boxes)
-    union = (gt_boxes[:, None, 2] * gt_boxes[:, None, 3] + hyp_boxes[None, :, 2] * hyp_boxes[None, :, 3]) - inter
-    distance = 1.0 - np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
+    distance = 1.0 - checked_iou(gt_boxes, hyp_boxes)
     distance[distance > max_iou_distance] = np.nan
     return distance
 
@@ -551,7 +587,7 @@ def matched_pairs(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> np.nda
 
 
 def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
-    """Score hypothesis tracks against ground truth (CLEAR MOT, IDF1, centre errors).
+    """Score hypothesis tracks against ground truth (CLEAR MOT, IDF1, HOTA, centre errors).
 
     Per frame: the hypotheses are matched (Hungarian algorithm on :func:`iou_distance`)
     against every ground-truth box; those matched to a box with flag 0 are dropped; the
@@ -560,7 +596,9 @@ def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
     then pairs the rest by the Hungarian algorithm, and counts identity switches, misses
     and false positives.  The summary comes from ``motmetrics.metrics``, except MOTP
     (reported as a mean IoU, see :class:`Scores`) and the centre errors, which are
-    measured on the MATCH and SWITCH events of the accumulator.
+    measured on the MATCH and SWITCH events of the accumulator.  HOTA and its parts are
+    :func:`~belief_tracking.hota.hota` on the scored ground-truth rows and every hypothesis
+    row (TrackEval's matching, independent of the CLEAR MOT one).
 
     Parameters
     ----------
@@ -606,11 +644,17 @@ def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
     >>> scores.mean_centre_error   # 0, 0 and 1 pixel
     0.3333333333333333
 
+    HOTA sees the same boxes over the IoU thresholds α: the third box (IoU 9/11) counts only up to
+    α = 0.8, the false positive lowers DetA, and the track change halves the association of frame 3:
+
+    >>> round(scores.deta, 4), round(scores.assa, 4), round(scores.hota, 4)
+    (0.6947, 0.5731, 0.6251)
+
     No tracks at all miss every box:
 
     >>> nothing = evaluate(gt, np.zeros((0, 7)))
-    >>> nothing.mota, nothing.idf1, nothing.false_negatives, nothing.matched_pairs
-    (0.0, 0.0, 3, 0)
+    >>> nothing.mota, nothing.idf1, nothing.hota, nothing.false_negatives, nothing.matched_pairs
+    (0.0, 0.0, 0.0, 3, 0)
     """
     matching = _accumulate(gt, hyp, max_iou_distance)
     _, idtp = _identity_assignment(matching)
@@ -619,6 +663,9 @@ def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
     objects, predictions = matching.num_objects, matching.num_predictions
     centre_errors = _pairs(matching)[:, 3]
     nan = float("nan")
+    gt_rows, hyp_rows = matching.gt_rows[matching.gt_rows[:, _FLAG] != 0], matching.hyp_rows
+    hota_means = hota(gt_rows[:, _FRAME], gt_rows[:, _ID], gt_rows[:, _X:_FLAG],
+                      hyp_rows[:, _FRAME], hyp_rows[:, _ID], hyp_rows[:, _X:_FLAG]).means()
 
     def ratio(numerator: float, denominator: float) -> float:
         return numerator / denominator if denominator else nan
@@ -627,6 +674,7 @@ def evaluate(gt: Any, hyp: Any, *, max_iou_distance: float = 0.5) -> Scores:
         mota=1.0 - ratio(matching.misses + switches + matching.false_positives, objects),
         motp=1.0 - matching.distance_sum / detections if detections > 0 else nan,
         idf1=ratio(2 * idtp, objects + predictions),
+        **{name: hota_means[name] for name in HOTA_FIELDS},
         precision=ratio(detections, matching.false_positives + detections),
         recall=ratio(detections, objects),
         id_switches=switches,

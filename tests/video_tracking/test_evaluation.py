@@ -3,6 +3,7 @@
 import argparse
 import json
 import math
+import re
 from fractions import Fraction
 from pathlib import Path
 
@@ -206,11 +207,13 @@ def test_scores_is_frozen_and_its_table_names_every_score():
         scores.mota = 0.5
     table = scores.format_table()
     assert len(table.splitlines()) == 2 + len(scores.to_dict())
-    for label in ("MOTA", "MOTP (mean IoU of matches)", "IDF1", "ID switches", "false positives",
+    for label in ("MOTA", "MOTP (mean IoU of matches)", "IDF1", "HOTA (higher-order tracking accuracy)",
+                  "DetA (detection accuracy)", "AssA (association accuracy)", "ID switches", "false positives",
                   "mean centre error (px)", "median centre error (px)"):
         assert label in table
     assert list(scores.to_dict()) == [
-        "mota", "motp", "idf1", "precision", "recall", "id_switches", "false_positives", "false_negatives",
+        "mota", "motp", "idf1", "hota", "deta", "assa", "loca", "detre", "detpr", "assre", "asspr",
+        "precision", "recall", "id_switches", "false_positives", "false_negatives",
         "matched_pairs", "num_objects", "num_predictions", "ignored_predictions", "num_frames",
         "mean_centre_error", "median_centre_error"]
     assert isinstance(Scores(**scores.to_dict()), Scores)
@@ -528,9 +531,12 @@ def test_belief_eval_scores_an_empty_tracks_file_as_missing_every_box(files, cap
     assert scores["mota"] == 0.0 and scores["idf1"] == 0.0 and scores["recall"] == 0.0
     assert scores["matched_pairs"] == 0 and scores["num_predictions"] == 0
     assert scores["false_negatives"] == scores["num_objects"] > 0 and scores["motp"] is None
+    assert scores["hota"] == scores["deta"] == scores["assa"] == 0.0
     args = parse(["eval", str(empty), gt])
     assert args.func(args) == 0
-    assert "MOTA                        0.0000" in capsys.readouterr().out
+    table = capsys.readouterr().out
+    assert re.search(r"^MOTA +0\.0000$", table, re.MULTILINE)
+    assert re.search(r"^HOTA \(higher-order tracking accuracy\) +0\.0000$", table, re.MULTILINE)
     args = parse(["eval", gt, str(empty)])  # an empty ground truth is still refused
     with pytest.raises(TrackFileError, match="empty"):
         args.func(args)
