@@ -7,8 +7,9 @@ detector's boxes (a MOTChallenge detection file).  With no init file the tracks 
 started, lost, found again and ended automatically from the detections, or from the
 person blobs of the background model without them; ``--init BOXES``
 gives the targets of the first frame (later entries are still found automatically);
-``--init-from-gt GT.txt`` takes every birth and death from a ground truth and scores the
-tracks against it; a MOTChallenge sequence folder is scored against its own ground truth
+``--init-from-gt GT.txt`` takes every birth and death from a ground truth (the tracks
+still learn the background and follow the person blobs, or the detections, as automatic
+ones do) and scores the tracks against it; a MOTChallenge sequence folder is scored against its own ground truth
 (``gt/gt.txt``, :func:`~belief_tracking.sources.sequence_ground_truth`) when no ``--gt`` is
 given.  ``belief track --demo --out DIR`` renders the synthetic demo scene,
 tracks it automatically (the ground truth is not given to the tracker) and prints the
@@ -169,7 +170,8 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
     automatic = args.init_from_gt is None
     if automatic and options.get("initiation") is not False:
         # Without an init file every track starts from the background model, which must know
-        # the background before the first frame; with one, only later entries are added.
+        # the background before the first frame; with one, only later entries are added.  (The
+        # births and deaths of a ground truth are followed as run() does, runner.run_config.)
         table = options.get("initiation")
         table = dict(table) if isinstance(table, dict) else {}
         table.setdefault("first_frame", args.init is None)
@@ -369,7 +371,7 @@ def _track_source(args: argparse.Namespace, config, out, found: Path | None = No
     from .errors import TrackingError
     from .initiation import init_from_gt, read_init_boxes
     from .limits import clipped
-    from .runner import run
+    from .runner import run, run_config
     from .sources import open_source
 
     if args.source is None:
@@ -399,7 +401,7 @@ def _track_source(args: argparse.Namespace, config, out, found: Path | None = No
             init = f"the boxes of {clipped(args.init)} on the first frame, later entries automatic"
         else:
             init = f"automatic, from {'the detections' if detections is not None else 'foreground blobs'}"
-        _track_details(args, config, frames, init, detections, gt)
+        _track_details(args, config if plan is None else run_config(config, plan), frames, init, detections, gt)
     except BaseException:
         frames.close()
         raise
@@ -509,8 +511,10 @@ def _add_track_inputs(p: argparse.ArgumentParser) -> None:
                         "to the first missing file); or a MOTChallenge sequence folder (with seqinfo.ini)")
     init = p.add_mutually_exclusive_group()
     init.add_argument("--init-from-gt", metavar="GT.txt",
-                      help="MOTChallenge ground truth: each id is born at its first box and removed after its last "
-                           "(the tracks are also scored against it)")
+                      help="MOTChallenge ground truth: each id is born at its first box and removed after its last, "
+                           "and no other track starts or ends (its tracks still follow the person blobs or "
+                           "detections, and are lost and found again as automatic ones are); the tracks are also "
+                           "scored against it")
     init.add_argument("--init", metavar="BOXES",
                       help="CSV of id,x,y,w,h lines (1-based corner, as in MOT files): targets of the first frame; "
                            "people entering later are found automatically")
@@ -544,7 +548,8 @@ def _add_tracker_settings(p: argparse.ArgumentParser) -> None:
                    help="adapt each target's particle count to the conflict between its cues (at most --particles)")
     p.add_argument("--warm-up", type=_integer(0), metavar="N",
                    help=f"frames spread over the video that the background model learns from first "
-                        f"(default {AUTOMATIC_WARM_UP} without an init file, else 0)")
+                        f"(default {AUTOMATIC_WARM_UP} where the foreground is read: automatic tracks, "
+                        f"or the foreground cue)")
     p.add_argument("--diagnostics", choices=["strategy", "all"],
                    help="diagnostics.csv columns: those of the running parts (default), or all of them, whatever "
                         "the fusion (the mean masses and belief of W (33)-(35), the feature confidences of C (13), the "

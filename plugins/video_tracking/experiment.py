@@ -172,7 +172,10 @@ class SequenceSpec:
         Paths of a recorded video and its MOTChallenge ground truth (absolute once loaded).
     init : {"gt", "automatic"}
         ``"gt"``: every target is born at its first ground-truth box and removed after its
-        last (``belief track --init-from-gt``); ``"automatic"``: the tracks start and end on
+        last (``belief track --init-from-gt``), its track supported and corrected by the
+        frames' candidates after a background warm-up of 50 frames
+        where the cues read the foreground (:data:`~belief_tracking.initiation.FOLLOW_PLAN`;
+        a method's ``initiation = false`` leaves the particle filters alone); ``"automatic"``: the tracks start and end on
         their own (SPEC B.4) after a background warm-up of 50 frames.
     detections : str or None
         Path of a MOTChallenge detection file (``det.txt``, absolute once loaded), read with
@@ -401,7 +404,23 @@ def _cell_settings(tracker: tuple[tuple[str, Any], ...], method: MethodSpec, aut
     if automatic:
         settings.setdefault("initiation", {})
         settings.setdefault("warm_up", AUTOMATIC_WARM_UP)
+    elif "initiation" not in settings and "foreground" in settings.get("cues", _default_cues()):
+        # As ``belief track --init-from-gt`` (runner.run_config): the ground truth's births and
+        # deaths, with tracks that learn the background and follow the candidates as automatic
+        # ones do (FOLLOW_PLAN).  A method's own ``initiation`` is used as it is: ``false`` keeps
+        # the particle filters alone.
+        from .initiation import FOLLOW_PLAN, settings_of
+
+        settings["initiation"] = settings_of(FOLLOW_PLAN)
+        settings.setdefault("warm_up", AUTOMATIC_WARM_UP)
     return settings
+
+
+@functools.cache
+def _default_cues() -> tuple[str, ...]:
+    from .config import TrackerConfig
+
+    return TrackerConfig().cues
 
 
 @functools.lru_cache(maxsize=8192)

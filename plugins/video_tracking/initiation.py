@@ -27,6 +27,7 @@ the connected components; everything else is NumPy.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -51,6 +52,8 @@ __all__ = [
     "foreground_blobs",
     "foreground_fraction",
     "COVERED_FRACTION",
+    "FOLLOW_PLAN",
+    "settings_of",
 ]
 
 Box = tuple[float, float, float, float]
@@ -366,6 +369,17 @@ class InitiationConfig:
         stays the overlap alone (``match_iou``).  Foreground blobs are assigned on overlap
         alone: a blob may hold several people.  The default was chosen with
         ``benchmarks/choose_defaults.py``.
+    births : bool
+        Whether tracks start and end on their own (default True).  False: every birth and
+        death comes from the init plan.  The candidates still support and correct the
+        planned tracks (their boxes follow the candidates they take, and the background
+        model does not learn the pixels under them); a planned track that nothing supports
+        is hidden after ``coast_frames`` frames and lost after ``lost_frames`` (no longer
+        output, and remembered), as an automatic one is, and a chain of candidates only
+        brings a lost track back (re-identification), never a new one.  A run given a plan
+        and no initiation works so where its cues read the foreground (:data:`FOLLOW_PLAN`,
+        :func:`~belief_tracking.runner.run_config`): the births and deaths of a ground truth
+        are all known, and its tracks still use everything the foreground tells.
     Raises
     ------
     TrackingError
@@ -403,6 +417,7 @@ class InitiationConfig:
     max_aspect: float = 0.5
     centre_gain: float = 0.5
     appearance_weight: float = 0.75
+    births: bool = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "border", _integer("border", self.border, 0))
@@ -436,11 +451,36 @@ class InitiationConfig:
         object.__setattr__(self, "centre_gain", _fraction("centre_gain", self.centre_gain, allow_zero=True))
         object.__setattr__(self, "appearance_weight", checks.number("InitiationConfig.appearance_weight",
                                                                     self.appearance_weight, minimum=0.0))
+        object.__setattr__(self, "births", checks.flag("InitiationConfig.births", self.births))
 
     def min_area_pixels(self, image_shape: tuple[int, int]) -> float:
         """The smallest blob area in pixels, ``min_area · W · H``, for an image of shape (H, W)."""
         height, width = checks.image_shape(image_shape)
         return self.min_area * height * width
+
+
+#: The initiation of a run given an init plan and no initiation (``belief track --init-from-gt``,
+#: :func:`~belief_tracking.runner.run_config`): every birth and death is the plan's, and the
+#: frame's candidates (the person blobs of the foreground, or a detector's boxes) support, correct,
+#: lose and find again the planned tracks as they do automatic ones, with the pixels under the
+#: tracks kept out of the background model.  A planned track's first box is the ground truth's
+#: (or the user's), so the centre goes all the way to the candidate it takes (``centre_gain`` 1):
+#: the plan says that person is there, and the candidate says where.
+FOLLOW_PLAN = InitiationConfig(first_frame=False, births=False, centre_gain=1.0)
+
+
+def settings_of(config: InitiationConfig) -> dict:
+    """The fields of ``config`` that differ from the defaults, as a table of settings (``--set initiation.…``).
+
+    Examples
+    --------
+    >>> settings_of(FOLLOW_PLAN)
+    {'first_frame': False, 'centre_gain': 1.0, 'births': False}
+    >>> InitiationConfig(**settings_of(FOLLOW_PLAN)) == FOLLOW_PLAN
+    True
+    """
+    return {f.name: getattr(config, f.name) for f in dataclasses.fields(config)
+            if getattr(config, f.name) != f.default}
 
 
 # -- input checks ---------------------------------------------------------------------------------

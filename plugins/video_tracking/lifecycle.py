@@ -192,8 +192,9 @@ class Lifecycle:
             missed = 0 if supported[k] else life.unsupported + 1
             out = life.leaving + 1 if at_border[k] and not supported[k] else 0
             twin = life.twins + 1 if duplicate[k] else 0
-            if out >= config.exit_frames or (config.duplicate_frames is not None
-                                             and twin >= config.duplicate_frames):
+            # Without births of its own (births=False) the plan says when a track ends.
+            if config.births and (out >= config.exit_frames or (config.duplicate_frames is not None
+                                                                and twin >= config.duplicate_frames)):
                 ended.append(k)
             elif config.lost_frames is not None and missed >= config.lost_frames:
                 lost.append(k)

@@ -27,7 +27,7 @@ from .defaults import AUTOMATIC_WARM_UP
 from .detections import Detections, check_detections
 from .errors import DetectionFileError, InitError, TrackingError
 from .extras import require
-from .initiation import InitiationConfig, InitPlan
+from .initiation import FOLLOW_PLAN, InitiationConfig, InitPlan
 from .motfiles import check_ground_truth, read_mot
 from .outdir import OutputFolder, input_paths
 from .sources import FrameSource, open_source
@@ -47,7 +47,7 @@ from .writers import (
     feed,
 )
 
-__all__ = ["Summary", "run", "start_tracker", "output_names"]
+__all__ = ["Summary", "run", "run_config", "start_tracker", "output_names"]
 
 
 @dataclass(frozen=True)
@@ -129,10 +129,11 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(),
     init : InitPlan or None
         Births and deaths of the targets (:func:`~belief_tracking.initiation.init_from_gt`,
         :func:`~belief_tracking.initiation.read_init_boxes`); None leaves them all to
-        the automatic initiation: ``config.initiation``, or where it is None, as on the
-        command line, its defaults with tracks born on the first frame too and a background
-        learnt from :data:`~belief_tracking.defaults.AUTOMATIC_WARM_UP` frames (unless
-        ``config.warm_up`` is set).
+        the automatic initiation.  Where ``config.initiation`` is None, the run learns the
+        background first and reads the frames' candidates, as on the command line
+        (:func:`run_config`): a plan's tracks follow the candidates they take (with the
+        foreground cue), and without a plan the tracker finds the people itself from the first
+        frame on.
     config : TrackerConfig
         With ``config.warm_up`` > 0 the background model first learns from that many frames
         spread over the whole source (a video file is then decoded twice).
@@ -193,10 +194,7 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(),
     for package in ("tqdm", "cv2"):
         require(package)  # a missing extra is one line, before any input is read or any file written
     _check_arguments(seed, init, config, detections)
-    if init is None and config.initiation is None:
-        # As on the command line: without births and deaths given, the tracker finds the people itself.
-        config = dataclasses.replace(config, initiation=InitiationConfig(first_frame=True),
-                                     warm_up=config.warm_up or AUTOMATIC_WARM_UP)
+    config = run_config(config, init)
     started = time.perf_counter()
     names = output_names(write_video, write_plot, tuple(extra_outputs or ()))
     staged = _output_folder(out_dir, names, input_paths(source, gt), force)
@@ -235,6 +233,43 @@ def run(source, init: InitPlan | None, config: TrackerConfig = TrackerConfig(),
     return Summary(timing.frames, timing.tracking_fps, timing.overall_fps, tracks.array(),
                    scoring.scores if scoring is not None else None, files, diagnostics.records,
                    expected_frames=frames.count)
+
+
+def run_config(config: TrackerConfig, init: InitPlan | None) -> TrackerConfig:
+    """The settings a :func:`run` of ``config`` and ``init`` tracks with, as on the command line.
+
+    A config with an initiation is used as it is.  Without one, the run's tracks learn the
+    background from :data:`~belief_tracking.defaults.AUTOMATIC_WARM_UP` frames (unless
+    ``config.warm_up`` is set) and read the frame's candidates:
+
+    * no plan: the tracker finds the people itself, from the first frame on
+      (``InitiationConfig(first_frame=True)``);
+    * a plan and the foreground cue: the plan's births and deaths are all there are
+      (:data:`~belief_tracking.initiation.FOLLOW_PLAN`), and the foreground's blobs (or a
+      detector's boxes) support and correct its tracks, lose them and find them again.
+      Knowing the births is more than an automatic run knows: its tracks must not see less
+      than automatic ones see.
+
+    A plan without the foreground cue keeps no background model: its tracks are the particle
+    filters alone, as the cues ask (an ablation of the cues).  The summary of the run records
+    the settings used.
+
+    Examples
+    --------
+    >>> from belief_tracking.initiation import FOLLOW_PLAN, init_from_boxes
+    >>> config = run_config(TrackerConfig(), init_from_boxes([(10, 20, 8, 16)]))
+    >>> config.initiation == FOLLOW_PLAN, config.warm_up
+    (True, 50)
+    >>> config = run_config(TrackerConfig(warm_up=10), None)
+    >>> config.initiation.first_frame, config.initiation.births, config.warm_up
+    (True, True, 10)
+    >>> run_config(TrackerConfig(cues=("colour", "location")), init_from_boxes([(10, 20, 8, 16)])).initiation is None
+    True
+    """
+    if config.initiation is not None or (init is not None and "foreground" not in config.cues):
+        return config
+    initiation = InitiationConfig(first_frame=True) if init is None else FOLLOW_PLAN
+    return dataclasses.replace(config, initiation=initiation, warm_up=config.warm_up or AUTOMATIC_WARM_UP)
 
 
 def start_tracker(config: TrackerConfig, init: InitPlan | None, seed: int, source: FrameSource) -> Tracker:

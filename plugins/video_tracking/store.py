@@ -123,10 +123,15 @@ class Track:
                    np.array([w, h]), centre[1], dict(templates), {name: t.copy() for name, t in templates.items()},
                    similarity=similarity, last_frame=last_frame, planned=planned)
 
+    def scale(self, state: np.ndarray | None = None) -> float:
+        """exp(log_scale) of ``state`` (default: the estimate): its window is the base size times this."""
+        state = self.estimate if state is None else state
+        return math.exp(min(max(float(state[LOG_SCALE]), -30.0), 30.0))
+
     def box(self, state: np.ndarray | None = None) -> tuple[float, float, float, float]:
         """The window ``x, y, w, h`` of ``state`` (default: the estimate), in 0-based pixels."""
         state = self.estimate if state is None else state
-        w, h = self.size * math.exp(min(max(float(state[LOG_SCALE]), -30.0), 30.0))
+        w, h = self.size * self.scale(state)
         return (float(state[CX] - w / 2.0), float(state[CY] - h / 2.0), float(w), float(h))
 
     def predicted_box(self, dt: float) -> np.ndarray:

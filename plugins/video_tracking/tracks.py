@@ -119,6 +119,7 @@ class TrackManager:
         self.lifecycle: Lifecycle | None = None
         self._birth_boxes: list[tuple[float, float, float, float]] = []
         self._next_id = max((t.id for t in plan.targets), default=0) + 1 if plan is not None else 1
+        self._planned = {target.id: target for target in plan.targets} if plan is not None else {}
 
     def start(self, image_shape: tuple[int, int]) -> None:
         """Get ready for frames of ``image_shape`` (H, W): the automatic initiation needs it."""
@@ -192,13 +193,17 @@ class TrackManager:
         if self.lifecycle is None:
             return estimates
         gone, births = self._losses_and_deaths(view, tracked, estimates[:len(tracked)], assigned, likeness)
-        coast = self.config.initiation.coast_frames
-        # A track unsupported for longer than it may coast is still followed, but not output;
-        # the targets the user gave are always output.
-        estimates = [e for e in estimates
-                     if e.id not in gone and (self.store[e.id].planned or self.store[e.id].life.unsupported <= coast)]
-        self.store.forget(view.number, self.config.initiation.memory)
-        return estimates + self._automatic_births(view, births)
+        initiation = self.config.initiation
+        # A track unsupported for longer than it may coast is still followed, but not output.
+        # The targets the user gave beside automatic ones are always output; where the plan
+        # gives every birth (births=False), the candidates are what tells whether a planned
+        # track is still on its person, as for an automatic track.
+        always, coast = initiation.births, initiation.coast_frames
+        estimates = [e for e in estimates if e.id not in gone
+                     and ((always and self.store[e.id].planned) or self.store[e.id].life.unsupported <= coast)]
+        self.store.forget(view.number, initiation.memory)
+        born = self._automatic_births(view, births)
+        return estimates + (born if initiation.births else self._found_again(view.number, born))
 
     def _losses_and_deaths(self, view: FrameView, tracked: list[Track], estimates: list[Estimate],
                            assigned: np.ndarray | None, likeness: np.ndarray | None) -> tuple[set[int], np.ndarray]:
@@ -227,6 +232,23 @@ class TrackManager:
             born.append(self._reidentify(estimate, view.number))
         return born
 
+    def _found_again(self, frame: int, born: list[Estimate]) -> list[Estimate]:
+        """Without births of the initiation's own: of this frame's newborn tracks, those that took back a planned id.
+
+        A chain that looks like no lost target is nobody the plan knows of: its track ends at
+        once.  One that took back a lost target's id is that target again, until the plan's
+        last frame for it.
+        """
+        kept = []
+        for estimate in born:
+            target = self._planned.get(estimate.id)
+            if target is not None and (target.last_frame is None or target.last_frame >= frame):
+                self.store[estimate.id].last_frame = target.last_frame
+                kept.append(estimate)
+            else:
+                self.store.remove(estimate.id)
+        return kept
+
     def follow_candidates(self, frame: int, tracks: Sequence[Track], assigned: np.ndarray, candidates: np.ndarray,
                           detector: bool = False) -> None:
         """Tracks that took a candidate move towards it: size by ``size_smoothing``, centre by ``centre_gain``.
@@ -240,6 +262,10 @@ class TrackManager:
         box keeps a margin of background beside the person (detectors often give one
         aspect ratio to everybody): it gives at most ``max_aspect`` times its height as the
         width.  A foreground blob is the silhouette itself and gives its width as it is.
+
+        A track's window is its base size times exp(log_scale), the scale the perspective
+        model gives its row: the candidate is the whole window, so the base size moves
+        towards the candidate's size divided by that scale, or the scale would count twice.
         """
         initiation = self.config.initiation
         if initiation is None:
@@ -252,7 +278,7 @@ class TrackManager:
             track.last_seen = (frame, np.array([x, y, w, h]))
             width = min(w, initiation.max_aspect * h) if detector else w
             step = initiation.detection_size_smoothing if detector else rate
-            track.size = (1.0 - step) * track.size + step * np.array([width, h])
+            track.size = (1.0 - step) * track.size + step * np.array([width, h]) / track.scale()
             if gain > 0:
                 shift = np.zeros(track.particles.states.shape[1])
                 shift[[CX, CY]] = gain * score * (np.array([x + w / 2.0, y + h / 2.0]) - track.estimate[[CX, CY]])

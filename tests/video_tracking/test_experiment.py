@@ -201,8 +201,12 @@ def test_rms_table_is_w36_over_the_seeds(local_run):
     row = next(r for r in rows if r["method"] == "dsmc" and r["target"] == "1" and r["frame"] == "20")
     assert int(row["runs"]) == 2
     assert float(row["rms_error"]) == pytest.approx(math.sqrt((errors[0] ** 2 + errors[1] ** 2) / 2), rel=1e-12)
-    # one row per method, target and frame of the ground truth (2 targets x 20 frames)
-    assert len(rows) == 2 * 2 * 20
+    # one row per method, target and frame where a run has an estimate (of 2 targets x 20 frames: a
+    # GT-born track that nothing supports for a few frames is not output there)
+    estimated = {(cell.method.name, target, int(frame)) for cell in experiment.cells()
+                 for target, pairs in result.cells[cell.key]["errors"].items() for frame, _ in pairs}
+    assert len(rows) == len(estimated) and 0.9 * 2 * 2 * 20 <= len(rows) <= 2 * 2 * 20
+    assert all(int(row["runs"]) >= 1 for row in rows)
 
 
 def test_summary_is_the_mean_over_the_seeds(local_run):
@@ -267,7 +271,9 @@ def test_a_cell_runs_without_writing_files(tmp_path, monkeypatch):
     cell = experiment_from_mapping({**SMALL, "seeds": [0]}).cells()[0]
     record = run_cell(cell)
     assert list(tmp_path.iterdir()) == []
-    assert record["row"]["frames"] == 20 and len(record["tracks"]) == 40
+    # at most one row per target and frame (2 x 20), as many as the matched and the false tracks
+    assert record["row"]["frames"] == 20 and 36 <= len(record["tracks"]) <= 40
+    assert len(record["tracks"]) == record["row"]["matched_pairs"] + record["row"]["false_positives"]
     assert {len(curve) for curve in record["curves"]} == {6}
     assert all(curve[5] is None for curve in record["curves"])          # no similarity without its follow-up
 
