@@ -101,6 +101,7 @@ def _results_row(cell: Cell, config: TrackerConfig, timing: Timing, scores: Scor
         "particles": config.particles,
         "frames": timing.frames,
         "mota": scores.mota, "motp": scores.motp, "idf1": scores.idf1,
+        "hota": scores.hota, "deta": scores.deta, "assa": scores.assa,
         "precision": scores.precision, "recall": scores.recall,
         "id_switches": scores.id_switches, "false_positives": scores.false_positives,
         "false_negatives": scores.false_negatives, "matched_pairs": scores.matched_pairs,

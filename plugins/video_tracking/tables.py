@@ -4,7 +4,8 @@ The files an experiment writes into its output folder:
 
 ``results.csv``
     One row per run (tidy): the sequence, the method and its rule, fusion and cues, the
-    seed, the CLEAR MOT and identity scores, the centre errors, the RMS error of the run,
+    seed, the CLEAR MOT and identity scores, HOTA with its detection and association
+    parts (DetA, AssA), the centre errors, the RMS error of the run,
     the mean particle count, the share of target-frames flagged as occluded (empty when the
     run did not follow the appearance), and the timings (:data:`TIMING_COLUMNS`, the only
     columns that differ between two runs of the same grid).
@@ -40,8 +41,8 @@ __all__ = ["SCORE_COLUMNS", "TIMING_COLUMNS", "RESULT_COLUMNS", "RMS_COLUMNS", "
            "summary_columns", "rms_per_frame", "summarise", "format_summary", "write_csv", "write_text"]
 
 #: Columns of ``results.csv`` that hold scores (identical for identical seeds).
-SCORE_COLUMNS = ("mota", "motp", "idf1", "precision", "recall", "id_switches", "false_positives",
-                 "false_negatives", "matched_pairs", "num_objects", "mean_centre_error", "median_centre_error",
+SCORE_COLUMNS = ("mota", "motp", "idf1", "hota", "deta", "assa", "precision", "recall", "id_switches",
+                 "false_positives", "false_negatives", "matched_pairs", "num_objects", "mean_centre_error", "median_centre_error",
                  "rms_error", "mean_particles", "occluded_share")
 
 #: Columns of ``results.csv`` that hold timings (the only ones that vary from run to run).
@@ -55,7 +56,7 @@ RESULT_COLUMNS = ("sequence", "method", "rule", "fusion", "cues", "seed", "parti
 RMS_COLUMNS = ("sequence", "method", "target", "frame", "runs", "rms_error")
 
 #: The scores averaged over the seeds in ``summary.csv``.
-SUMMARY_METRICS = ("mota", "idf1", "id_switches", "median_centre_error", "rms_error", "mean_particles",
+SUMMARY_METRICS = ("mota", "idf1", "hota", "id_switches", "median_centre_error", "rms_error", "mean_particles",
                    "tracking_fps")
 
 
@@ -134,21 +135,23 @@ def summarise(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
 
 
 def format_summary(rows: Sequence[Mapping[str, Any]]) -> str:
-    """The summary as a fixed-width text table: MOTA, IDF1, median and RMS error, tracking speed.
+    """The summary as a fixed-width text table: MOTA, IDF1, HOTA, median and RMS error, tracking speed.
 
     >>> print(format_summary([{"sequence": "s", "method": "m", "runs": 2, "mota_mean": 0.5, "idf1_mean": None,
-    ...                        "median_centre_error_mean": 3.0, "rms_error_mean": 4.0, "tracking_fps_mean": 90.0}]))
-    sequence           method               runs    MOTA    IDF1 median px   RMS px     fps
-    s                  m                       2   0.500       -      3.00     4.00    90.0
+    ...                        "hota_mean": 0.25, "median_centre_error_mean": 3.0, "rms_error_mean": 4.0,
+    ...                        "tracking_fps_mean": 90.0}]))
+    sequence           method               runs    MOTA    IDF1    HOTA median px   RMS px     fps
+    s                  m                       2   0.500       -   0.250      3.00     4.00    90.0
     """
-    lines = [f"{'sequence':<18} {'method':<20} {'runs':>4} {'MOTA':>7} {'IDF1':>7} {'median px':>9} "
+    lines = [f"{'sequence':<18} {'method':<20} {'runs':>4} {'MOTA':>7} {'IDF1':>7} {'HOTA':>7} {'median px':>9} "
              f"{'RMS px':>8} {'fps':>7}"]
     for r in rows:
         def num(name: str, digits: int) -> str:
             value = r[f"{name}_mean"]
             return "-" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
         lines.append(f"{r['sequence']:<18} {r['method']:<20} {r['runs']:>4} {num('mota', 3):>7} "
-                     f"{num('idf1', 3):>7} {num('median_centre_error', 2):>9} {num('rms_error', 2):>8} "
+                     f"{num('idf1', 3):>7} {num('hota', 3):>7} {num('median_centre_error', 2):>9} "
+                     f"{num('rms_error', 2):>8} "
                      f"{num('tracking_fps', 1):>7}")
     return "\n".join(lines)
 
