@@ -230,24 +230,21 @@ def hota(gt_frames: Any, gt_ids: Any, gt_boxes: Any, hyp_frames: Any, hyp_ids: A
     crowded_cols = np.bincount(cols[positive], minlength=len(hyp_frames)) > 1
     choice = np.union1d(gt_frames[crowded_rows], hyp_frames[crowded_cols])
     if len(choice):
-        entry_frame = gt_frames[rows]
+        entry_frame = gt_frames[rows]                   # ascending: the entries were gathered frame by frame
         in_choice = np.isin(entry_frame, choice)
         matched[in_choice] = False
         entries = np.flatnonzero(in_choice)
-        entries = entries[np.argsort(entry_frame[entries], kind="stable")]
         bounds = np.searchsorted(entry_frame[entries], choice, side="left").tolist() + [len(entries)]
-        c_g0, _ = _frame_slices(gt_frames, choice)
-        c_h0, _ = _frame_slices(hyp_frames, choice)
-        c_g1 = np.searchsorted(gt_frames, choice, side="right")
-        c_h1 = np.searchsorted(hyp_frames, choice, side="right")
+        c_g0, c_g1 = _frame_slices(gt_frames, choice)
+        c_h0, c_h1 = _frame_slices(hyp_frames, choice)
         for k, (g0, g1, h0, h1) in enumerate(zip(c_g0.tolist(), c_g1.tolist(), c_h0.tolist(), c_h1.tolist())):
             mine = entries[bounds[k]:bounds[k + 1]]
             matrix = np.zeros((g1 - g0, h1 - h0))
             matrix[rows[mine] - g0, cols[mine] - h0] = score[mine]
             match_rows, match_cols = linear_sum_assignment(-matrix)
-            where = np.full(matrix.shape, -1, dtype=np.intp)
-            where[rows[mine] - g0, cols[mine] - h0] = mine
-            chosen = where[match_rows, match_cols]
+            entry_of = np.full(matrix.shape, -1, dtype=np.intp)
+            entry_of[rows[mine] - g0, cols[mine] - h0] = mine
+            chosen = entry_of[match_rows, match_cols]
             matched[chosen[chosen >= 0]] = True     # a pair of IoU 0 is no true positive at any α
     match_sim = sims[matched]
     match_pair = pair_of[matched]

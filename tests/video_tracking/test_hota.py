@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from belief.cli import main
+from belief_tracking.errors import TrackingError
 from belief_tracking.evaluation import Scores, evaluate
 from belief_tracking.hota import ALPHAS, HOTA_FIELDS, hota
 from belief_tracking.motfiles import read_mot
@@ -163,3 +164,14 @@ def test_belief_eval_json_and_table_carry_hota(capsys):
                   "DetRe (detection recall)", "DetPr (detection precision)", "AssRe (association recall)",
                   "AssPr (association precision)"):
         assert words in table
+
+
+def test_hota_takes_empty_sides_and_refuses_ragged_arrays():
+    gt = walkers(ids=(1,), frames=range(1, 4))
+    none = np.zeros((0, 7))
+    only_tracks = hota(none[:, 0], none[:, 1], none[:, 2:6], gt[:, 0], gt[:, 1], gt[:, 2:6])
+    assert only_tracks.fp.tolist() == [3] * 19 and only_tracks.means()["detpr"] == 0.0
+    nothing = hota(none[:, 0], none[:, 1], none[:, 2:6], none[:, 0], none[:, 1], none[:, 2:6]).means()
+    assert nothing["hota"] == 0.0 and nothing["loca"] == 1.0
+    with pytest.raises(TrackingError, match="one of each per row"):
+        hota(gt[:, 0], gt[:1, 1], gt[:, 2:6], gt[:, 0], gt[:, 1], gt[:, 2:6])
