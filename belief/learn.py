@@ -1,0 +1,759 @@
+"""Mass functions learnt from data: the evidential k-nearest-neighbour classifier, likelihoods and counts.
+
+* :class:`EKNN`: Denœux's evidential k-nearest-neighbour rule (1995).  Each of the k training rows
+  nearest to a query is a piece of evidence for its own class, the weaker the farther it lies, and
+  the k pieces are fused by Dempster's rule.  Fit it on labelled rows, then ask for a
+  :class:`~belief.batch.MassBatch` per query set (:meth:`EKNN.predict_mass`) or for labels
+  (:meth:`EKNN.predict`), in the manner of scikit-learn (which is not needed).
+* :func:`consonant_from_likelihood`: Shafer's consonant mass function whose plausibility of each
+  hypothesis is its normalised likelihood.
+* :func:`idm_from_counts`: the imprecise Dirichlet model of observed counts.
+
+Every result lives under Shafer's model of a frame whose hypotheses are the class labels (written
+as strings), so it can be fused with any other source on that frame by :func:`~belief.rules.combine`.
+
+References: T. Denœux, *A k-nearest neighbor classification rule based on Dempster–Shafer theory*,
+IEEE Trans. SMC 25(5), 1995; L. M. Zouhal and T. Denœux, *An evidence-theoretic k-NN rule with
+parameter optimization*, IEEE Trans. SMC C 28(2), 1998; G. Shafer, *A Mathematical Theory of
+Evidence*, 1976, ch. 10; P. Walley, *Inferences from multinomial data: learning about a bag of
+marbles*, JRSS B 58(1), 1996.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from belief.batch import MassBatch
+from belief.errors import BeliefError, FrameError
+from belief.frame import Frame
+from belief.mass import MassFunction
+from belief.model import Model
+
+__all__ = [
+    "EKNN",
+    "consonant_from_likelihood",
+    "idm_from_counts",
+    "LearningDataError",
+    "LearningOptionError",
+    "NotFittedError",
+    "NEIGHBOUR_SEARCHES",
+]
+
+#: The neighbour searches of :class:`EKNN`: ``"kdtree"`` needs scipy, ``"blocked"`` is numpy only.
+NEIGHBOUR_SEARCHES = ("auto", "kdtree", "blocked")
+
+#: Query rows handled at once by :meth:`EKNN.predict_mass` (the k-d tree answers them in one call).
+QUERY_BLOCK_ROWS = 65_536
+#: Distances held at once by the numpy neighbour search: a block of queries times the training rows.
+DISTANCE_BLOCK_ENTRIES = 1_000_000
+#: The smallest γ that ``optimize`` reaches (as in evtools-dst).
+GAMMA_FLOOR = 1e-4
+#: The largest change of ln γ in one step of ``optimize``.
+MAX_LOG_STEP = 1.0
+#: Rows of one class compared at once for the default γ: blocks of PAIR_BLOCK_ROWS² distances (8 MB).
+PAIR_BLOCK_ROWS = 1024
+
+
+class LearningDataError(BeliefError, ValueError):
+    """Data given to :mod:`belief.learn` are malformed: training or query rows, labels, likelihoods or counts."""
+
+
+class LearningOptionError(BeliefError, ValueError):
+    """A parameter of :mod:`belief.learn` is out of its range (k, α, γ, λ, s, the neighbour search)."""
+
+
+class NotFittedError(BeliefError, ValueError, AttributeError):
+    """A classifier is asked for predictions before :meth:`EKNN.fit` has run."""
+
+
+# -- input checks ---------------------------------------------------------------------------------
+def _check_rows(X, what: str, n_features: int | None = None) -> np.ndarray:
+    """``X`` as a finite float array of shape (N, p), or a :class:`LearningDataError` that says what is wrong."""
+    try:
+        array = np.asarray(X, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise LearningDataError(f"{what} must be an array of numbers of shape (N, p): {err}") from None
+    if np.asarray(X).dtype == bool:
+        raise LearningDataError(f"{what} must hold numbers, not booleans")
+    if array.ndim != 2:
+        raise LearningDataError(f"{what} must have shape (N, p), one row per sample, got shape {array.shape}")
+    if n_features is not None and array.shape[1] != n_features:
+        raise LearningDataError(f"{what} has {array.shape[1]} features, but the classifier was fitted on {n_features}")
+    if array.shape[1] == 0:
+        raise LearningDataError(f"{what} has no features (shape {array.shape})")
+    bad = ~np.isfinite(array)
+    if bad.any():
+        row, col = map(int, np.argwhere(bad)[0])
+        raise LearningDataError(f"{what} holds {float(array[row, col])!r} in row {row}, feature {col}; "
+                                "every value must be a finite number")
+    return array
+
+
+def _hypothesis_names(labels) -> tuple[str, ...]:
+    """The labels written as hypothesis names, refused when two coincide or one cannot name a hypothesis."""
+    names = tuple(str(label) for label in labels)
+    if len(set(names)) != len(names):
+        seen: dict[str, Any] = {}
+        for label, name in zip(labels, names):
+            if name in seen:
+                raise LearningDataError(f"the labels {seen[name]!r} and {label!r} are both written {name!r}; "
+                                        "each label must have a name of its own")
+            seen[name] = label
+    for label, name in zip(labels, names):
+        try:
+            Frame([name])
+        except FrameError as err:
+            raise LearningDataError(f"the label {label!r} cannot name a hypothesis: {err}") from None
+    return names
+
+
+def _is_integer(value) -> bool:
+    """An int or numpy integer, not a boolean."""
+    return isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))
+
+
+def _is_real(value) -> bool:
+    """A real number (int, float, numpy number), not a boolean and not a string."""
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+
+
+def _check_number(value, what: str) -> float:
+    """A real number (not a boolean, not a string) as a float."""
+    if not _is_real(value):
+        raise LearningDataError(f"{what} must be a number, got {value!r}")
+    return float(value)
+
+
+# -- the EK-NN closed form ----------------------------------------------------------------------------
+def _evidence_weights(sq_dist: np.ndarray, neighbour_class: np.ndarray, gamma: np.ndarray, alpha: float,
+                      n_classes: int) -> tuple[np.ndarray, np.ndarray]:
+    """Supports s_i = α exp(−γ_c² d_i²) of the neighbours, shape (N, k), and the weight of evidence per class.
+
+    The weight of class c is w_c = −Σ_{i of class c} ln(1 − s_i), shape (N, M): fusing simple support
+    functions that all point at {c} multiplies their masses on Θ, so it adds these logarithms.
+    """
+    n_rows, k = sq_dist.shape
+    support = alpha * np.exp(-(gamma[neighbour_class] ** 2) * sq_dist)
+    weights = -np.log1p(-support)
+    cells = (np.arange(n_rows)[:, None] * n_classes + neighbour_class).ravel()
+    per_class = np.bincount(cells, weights=weights.ravel(), minlength=n_rows * n_classes)
+    return support, per_class.reshape(n_rows, n_classes)
+
+
+def _fused_masses(class_weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Dempster's combination of the neighbours' simple support functions, from the weights of evidence.
+
+    With P_c = exp(−w_c) the mass left on Θ by the neighbours of class c, the unnormalised result is
+    m({c}) ∝ (1 − P_c) Π_{c' ≠ c} P_c' and m(Θ) ∝ Π_c P_c.  Dividing both by Π_c P_c and by
+    exp(w_max) keeps every term in [0, 1], so that many close neighbours neither underflow nor
+    overflow: m({c}) ∝ exp(w_c − w_max)(1 − exp(−w_c)), m(Θ) ∝ exp(−w_max).
+
+    Returns
+    -------
+    masses : ndarray, shape (N, M + 1)
+        m({c_1}), …, m({c_M}), m(Θ) per row.
+    scaled_theta : ndarray, shape (N,)
+        exp(−w_max) / Z, the normaliser's share the gradient of the training cost needs.
+    """
+    top = class_weight.max(axis=1, keepdims=True)
+    singles = np.exp(class_weight - top) * -np.expm1(-class_weight)
+    theta = np.exp(-top)
+    total = singles.sum(axis=1, keepdims=True) + theta
+    masses = np.empty((class_weight.shape[0], class_weight.shape[1] + 1))
+    np.divide(singles, total, out=masses[:, :-1])
+    np.divide(theta, total, out=masses[:, -1:])
+    return masses, total[:, 0]
+
+
+# -- distances ------------------------------------------------------------------------------------------
+def _scipy_spatial():
+    """scipy.spatial if scipy is installed, else None: scipy only makes things faster."""
+    try:
+        import scipy.spatial
+        import scipy.spatial.distance
+    except ImportError:  # pragma: no cover - the test venv has scipy; the numpy paths are tested by name
+        return None
+    return scipy.spatial
+
+
+def _block_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Euclidean distances between the rows of a (n_a, p) and b (n_b, p), shape (n_a, n_b), from differences.
+
+    Differences, not the expansion |a|² + |b|² − 2a·b, which loses the distances of close rows.
+    """
+    squares = np.zeros((a.shape[0], b.shape[0]))
+    step = np.empty_like(squares)
+    for feature in range(a.shape[1]):
+        np.subtract(a[:, feature, None], b[None, :, feature], out=step)
+        step *= step
+        squares += step
+    return np.sqrt(squares, out=squares)
+
+
+def mean_pairwise_distance(rows: np.ndarray, use_scipy: bool = True) -> float:
+    """The mean Euclidean distance over the n(n − 1)/2 pairs of rows, without an (n, n) matrix.
+
+    Parameters
+    ----------
+    rows : ndarray, shape (n, p)
+        n ≥ 2 rows.
+    use_scipy : bool
+        Use ``scipy.spatial.distance.cdist`` on each block when scipy is installed (faster);
+        otherwise numpy.  Both compute each distance from the differences of the rows.
+
+    Returns
+    -------
+    float
+        (2 / (n (n − 1))) Σ_{i<j} ‖x_i − x_j‖, summed block by block over blocks of
+        :data:`PAIR_BLOCK_ROWS` rows: a diagonal block holds each pair twice, a block above it once.
+
+    Examples
+    --------
+    >>> mean_pairwise_distance(np.array([[0.0, 0.0], [3.0, 4.0], [6.0, 8.0]]))  # (5 + 10 + 5) / 3
+    6.666666666666667
+    """
+    spatial = _scipy_spatial() if use_scipy else None
+    distances = spatial.distance.cdist if spatial is not None else _block_distances
+    n = rows.shape[0]
+    # Centred rows keep the block sums in the scale of the spread, whatever the offset of the data.
+    rows = rows - rows.mean(axis=0)
+    starts = range(0, n, PAIR_BLOCK_ROWS)
+    total = 0.0
+    for first in starts:
+        block = rows[first:first + PAIR_BLOCK_ROWS]
+        total += 0.5 * float(distances(block, block).sum())
+        for second in range(first + PAIR_BLOCK_ROWS, n, PAIR_BLOCK_ROWS):
+            total += float(distances(block, rows[second:second + PAIR_BLOCK_ROWS]).sum())
+    return total / (n * (n - 1) / 2)
+
+
+def default_gamma(X: np.ndarray, class_index: np.ndarray, n_classes: int, use_scipy: bool = True) -> np.ndarray:
+    """The per-class γ of Denœux's evclass package and of evtools-dst: γ_c = 1 / √(mean distance in class c).
+
+    Parameters
+    ----------
+    X : ndarray, shape (n, p)
+        Training rows.
+    class_index : ndarray of int, shape (n,)
+        The class of each row, 0 to M − 1.
+    n_classes : int
+        M.
+    use_scipy : bool
+        As for :func:`mean_pairwise_distance`.
+
+    Returns
+    -------
+    ndarray, shape (M,)
+        γ_c² = 1 / (mean Euclidean distance, not squared, between two rows of class c); γ_c = 1
+        for a class of fewer than two rows or of identical rows.
+
+    Examples
+    --------
+    >>> default_gamma(np.array([[0.0], [4.0], [1.0]]), np.array([0, 0, 1]), 2)  # class 0: mean distance 4
+    array([0.5, 1. ])
+    """
+    gamma = np.ones(n_classes)
+    for c in range(n_classes):
+        members = X[class_index == c]
+        if members.shape[0] < 2:
+            continue
+        mean = mean_pairwise_distance(members, use_scipy=use_scipy)
+        if mean > 0:
+            gamma[c] = 1.0 / math.sqrt(mean)
+    return gamma
+
+
+def _nearest_blocked(train: np.ndarray, queries: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """The k nearest training rows of each query by numpy alone, in blocks of queries.
+
+    Returns indices (N, k) and squared distances (N, k), nearest first; ties go to the lower index.
+    """
+    n_train = train.shape[0]
+    rows_at_once = max(1, DISTANCE_BLOCK_ENTRIES // max(n_train, 1))
+    index = np.empty((queries.shape[0], k), dtype=np.intp)
+    sq_dist = np.empty((queries.shape[0], k))
+    for first in range(0, queries.shape[0], rows_at_once):
+        block = queries[first:first + rows_at_once]
+        distance = _block_distances(block, train)
+        if k < n_train:
+            chosen = np.argpartition(distance, k - 1, axis=1)[:, :k]
+            chosen.sort(axis=1)
+        else:
+            chosen = np.broadcast_to(np.arange(n_train), (block.shape[0], n_train))
+        picked = np.take_along_axis(distance, chosen, axis=1)
+        order = np.argsort(picked, axis=1, kind="stable")
+        index[first:first + block.shape[0]] = np.take_along_axis(chosen, order, axis=1)
+        sq_dist[first:first + block.shape[0]] = np.take_along_axis(picked, order, axis=1) ** 2
+    return index, sq_dist
+
+
+# -- the classifier --------------------------------------------------------------------------------------
+class EKNN:
+    """Denœux's evidential k-nearest-neighbour classifier.
+
+    Neighbour i of a query, a training row of class c at Euclidean distance d_i, is a simple
+    support function: m_i({c}) = α exp(−γ_c² d_i²) and m_i(Θ) = 1 − m_i({c}), where Θ is the frame
+    of the class labels under Shafer's model.  The k nearest neighbours are fused by Dempster's
+    rule (SPEC A.3), in closed form: with P_c = Π_{i of class c} (1 − m_i({c})) the mass that
+    class c's neighbours leave on Θ,
+
+        m({c}) = (1 − P_c) Π_{c' ≠ c} P_c' / Z,   m(Θ) = Π_c P_c / Z,
+
+    and Z the sum of these numerators (one minus the conflict).  Each query row thus gets a
+    mass function whose focal elements are the singletons and Θ.
+
+    Parameters
+    ----------
+    k : int
+        Number of neighbours, k ≥ 1.
+    alpha : float
+        The most mass a neighbour can give its class, 0 ≤ α < 1 (Denœux suggests 0.95).  With
+        α < 1 no neighbour is certain, so the fusion never meets total conflict.
+    gamma : None, float or array_like of shape (M,)
+        The rate γ_c at which a neighbour's support fades with distance, per class in the order of
+        :attr:`classes_`.  None takes the default of Denœux's evclass package (and of
+        evtools-dst): γ_c² = 1 / (mean Euclidean distance between two training rows of class c),
+        γ_c = 1 for a class of fewer than two distinct rows.  With ``optimize`` it is the start.
+    optimize : bool
+        Learn γ by minimising the leave-one-out cost of Zouhal and Denœux (1998) on the training set,
+        (1 / 2n) Σ_rows Σ_c (m({c}) + λ m(Θ) − [y = c])², each training row classified by its k
+        nearest other rows; λ is ``ignorance_weight``.  Quasi-Newton steps on ln γ (numpy only).
+    ignorance_weight : float
+        λ ∈ [0, 1], the share of m(Θ) that counts for each class in that cost: 1 compares the
+        plausibilities with the labels (the default of evtools-dst), 1/M the pignistic
+        probabilities (Zouhal and Denœux's choice), 0 the beliefs.
+    max_iter : int
+        The most quasi-Newton steps of ``optimize``.
+    neighbours : {"auto", "kdtree", "blocked"}
+        How the neighbours are found: a ``scipy.spatial.cKDTree`` (needs scipy), a numpy search
+        over blocks of query rows, or the tree when scipy is installed.  Both give the same
+        neighbours except for rows at equal distance.
+
+    Attributes
+    ----------
+    classes_ : ndarray, shape (M,)
+        The sorted class labels (``numpy.unique`` of ``y``).
+    frame_ : Frame
+        The frame of the masses: the labels written as strings, in the order of ``classes_``.
+    model_ : Model
+        Shafer's model of ``frame_``.
+    gamma_ : ndarray, shape (M,)
+        The γ_c used.
+    loo_cost_ : float
+        With ``optimize``, the leave-one-out cost at ``gamma_`` (NaN otherwise).
+    n_features_in_ : int
+        p, the number of features.
+
+    Examples
+    --------
+    Two classes on a line, three neighbours, γ = 1 for both:
+
+    >>> clf = EKNN(k=3, alpha=0.9, gamma=1.0).fit([[0.0], [1.0], [3.0], [4.0]], ["a", "a", "b", "b"])
+    >>> masses = clf.predict_mass([[1.5]])
+    >>> [str(x) for x in masses.focal]
+    ['a', 'b', 'a|b']
+    >>> masses.values.round(4)
+    array([[0.7092, 0.0276, 0.2632]])
+    >>> clf.predict([[1.5], [3.2]])
+    array(['a', 'b'], dtype='<U1')
+
+    By hand: the neighbours lie at 0.5 (a), 1.5 (a) and 1.5 (b), with supports
+    s = 0.9 e^{−0.25} = 0.7009 and 0.9 e^{−2.25} = 0.0949.  Class a leaves
+    P_a = 0.2991 × 0.9051 = 0.2707 on Θ, class b leaves P_b = 0.9051, so m({a}) ∝ 0.7293 × 0.9051 = 0.6601,
+    m({b}) ∝ 0.0949 × 0.2707 = 0.0257 and m(Θ) ∝ 0.2707 × 0.9051 = 0.2450, which Z = 0.9308 divides.
+    """
+
+    def __init__(self, k: int = 5, alpha: float = 0.95, gamma=None, optimize: bool = False, *,
+                 ignorance_weight: float = 1.0, max_iter: int = 100, neighbours: str = "auto") -> None:
+        self.k = k
+        self.alpha = alpha
+        self.gamma = gamma
+        self.optimize = optimize
+        self.ignorance_weight = ignorance_weight
+        self.max_iter = max_iter
+        self.neighbours = neighbours
+
+    def __repr__(self) -> str:
+        return (f"EKNN(k={self.k!r}, alpha={self.alpha!r}, gamma={self.gamma!r}, optimize={self.optimize!r})")
+
+    # -- checks --------------------------------------------------------------------------------------
+    def _check_options(self, n_rows: int, n_classes: int) -> None:
+        if not _is_integer(self.k) or self.k < 1:
+            raise LearningOptionError(f"k must be a positive integer, got {self.k!r}")
+        if self.k > n_rows:
+            raise LearningOptionError(f"k = {self.k} neighbours, but there are only {n_rows} training rows")
+        if self.optimize and self.k >= n_rows:
+            raise LearningOptionError(f"optimize=True leaves each training row out, so k = {self.k} must be below "
+                                      f"the {n_rows} training rows")
+        alpha = self.alpha
+        if not _is_real(alpha) or not 0.0 <= alpha < 1.0:
+            raise LearningOptionError(f"alpha must be a number with 0 <= alpha < 1, got {alpha!r}")
+        weight = self.ignorance_weight
+        if not _is_real(weight) or not 0.0 <= weight <= 1.0:
+            raise LearningOptionError(f"ignorance_weight (λ) must be a number in [0, 1], got {weight!r}")
+        if not _is_integer(self.max_iter) or self.max_iter < 0:
+            raise LearningOptionError(f"max_iter must be a non-negative integer, got {self.max_iter!r}")
+        if self.neighbours not in NEIGHBOUR_SEARCHES:
+            raise LearningOptionError(f"neighbours must be one of {', '.join(NEIGHBOUR_SEARCHES)}; "
+                                      f"got {self.neighbours!r}")
+        if self.neighbours == "kdtree" and _scipy_spatial() is None:  # pragma: no cover - scipy is installed
+            raise LearningOptionError("neighbours='kdtree' needs scipy; install it or use neighbours='blocked'")
+
+    def _given_gamma(self, n_classes: int) -> np.ndarray | None:
+        if self.gamma is None:
+            return None
+        try:
+            gamma = np.array(self.gamma, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise LearningOptionError(f"gamma must be None, a number or one number per class, got {self.gamma!r}") \
+                from None
+        if np.asarray(self.gamma).dtype == bool:
+            raise LearningOptionError(f"gamma must hold numbers, not booleans: {self.gamma!r}")
+        if gamma.ndim == 0:
+            gamma = np.full(n_classes, float(gamma))
+        if gamma.shape != (n_classes,):
+            raise LearningOptionError(f"gamma must be a number or one number per class ({n_classes}), "
+                                      f"got shape {gamma.shape}")
+        if not (np.isfinite(gamma).all() and (gamma >= 0).all()):
+            raise LearningOptionError(f"every γ must be a finite number >= 0, got {gamma.tolist()}")
+        return gamma
+
+    # -- fit / predict -------------------------------------------------------------------------------
+    def fit(self, X, y) -> "EKNN":
+        """Keep the training rows, index them for the neighbour search and set γ.
+
+        Parameters
+        ----------
+        X : array_like, shape (n, p)
+            Training rows, finite numbers.
+        y : array_like, shape (n,)
+            Their class labels; at least two distinct ones.  A label becomes a hypothesis name by
+            ``str``, so it must be a valid one (no white space, none of ``( ) & | ∩ ∪ ∅ ,``).
+
+        Returns
+        -------
+        EKNN
+            The classifier itself.
+
+        Raises
+        ------
+        LearningDataError
+            Bad rows or labels.
+        LearningOptionError
+            An option out of range.
+        """
+        X = _check_rows(X, "X")
+        labels = np.asarray(y)
+        if labels.ndim != 1 or labels.shape[0] != X.shape[0]:
+            raise LearningDataError(f"y must hold one label per row of X, shape ({X.shape[0]},), got {labels.shape}")
+        if labels.dtype.kind == "f" and np.isnan(labels).any():
+            raise LearningDataError(f"y holds NaN in row {int(np.flatnonzero(np.isnan(labels))[0])}; every row "
+                                    "needs a label")
+        if labels.dtype == object and any(label is None for label in labels.tolist()):
+            raise LearningDataError("y holds None; every row needs a label")
+        try:
+            classes, class_index = np.unique(labels, return_inverse=True)
+        except TypeError as err:
+            raise LearningDataError(f"the labels of y cannot be sorted: {err}") from None
+        if classes.shape[0] < 2:
+            raise LearningDataError(f"y must hold at least two classes, got {classes.tolist()!r}")
+        names = _hypothesis_names(classes.tolist())
+        self._check_options(X.shape[0], classes.shape[0])
+        search = self.neighbours
+        if search == "auto":
+            search = "kdtree" if _scipy_spatial() is not None else "blocked"
+
+        self.classes_ = classes
+        self.frame_ = Frame(list(names))
+        self.model_ = Model.shafer(self.frame_)
+        self.n_features_in_ = X.shape[1]
+        self._train = X
+        self._class_index = class_index.reshape(-1).astype(np.intp)
+        self._search = search
+        self._tree = _scipy_spatial().cKDTree(X) if search == "kdtree" else None
+        gamma = self._given_gamma(classes.shape[0])
+        if gamma is None:
+            gamma = default_gamma(X, self._class_index, classes.shape[0], use_scipy=search == "kdtree")
+        self.loo_cost_ = math.nan
+        if self.optimize:
+            gamma, self.loo_cost_ = self._optimized_gamma(gamma)
+        self.gamma_ = gamma
+        return self
+
+    def _nearest(self, queries: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Indices (N, k) of the k nearest training rows and their squared distances, nearest first."""
+        if self._tree is None:
+            return _nearest_blocked(self._train, queries, k)
+        distance, index = self._tree.query(queries, k=k)
+        if k == 1:
+            distance, index = distance[:, None], index[:, None]
+        return index, distance ** 2
+
+    def _check_fitted(self) -> None:
+        if not hasattr(self, "gamma_"):
+            raise NotFittedError("this EKNN is not fitted yet; call fit(X, y) first")
+
+    def predict_mass(self, X) -> MassBatch:
+        """The fused mass function of each query row.
+
+        Parameters
+        ----------
+        X : array_like, shape (N, p)
+            Query rows, with the p features of the training rows.
+
+        Returns
+        -------
+        MassBatch
+            N rows over the M + 1 focal elements {c_1}, …, {c_M}, Θ, under Shafer's model of
+            :attr:`frame_`.  Rows are handled :data:`QUERY_BLOCK_ROWS` at a time, and the numpy
+            search compares at most :data:`DISTANCE_BLOCK_ENTRIES` pairs at once.
+
+        Raises
+        ------
+        NotFittedError
+            Before :meth:`fit`.
+        LearningDataError
+            Rows that are not finite numbers, or a number of features other than the training rows'.
+        """
+        self._check_fitted()
+        queries = _check_rows(X, "X", self.n_features_in_)
+        n_classes = self.classes_.shape[0]
+        values = np.empty((queries.shape[0], n_classes + 1))
+        for first in range(0, queries.shape[0], QUERY_BLOCK_ROWS):
+            block = queries[first:first + QUERY_BLOCK_ROWS]
+            index, sq_dist = self._nearest(block, self.k)
+            _, weight = _evidence_weights(sq_dist, self._class_index[index], self.gamma_, float(self.alpha), n_classes)
+            values[first:first + block.shape[0]] = _fused_masses(weight)[0]
+        focal = (*self.frame_.singletons, self.model_.total)
+        return MassBatch(focal, values, model=self.model_, validate=False)
+
+    def predict(self, X) -> np.ndarray:
+        """The label of largest pignistic probability BetP({c}) = m({c}) + m(Θ) / M for each query row.
+
+        Parameters
+        ----------
+        X : array_like, shape (N, p)
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            Labels taken from :attr:`classes_`; a tie goes to the first class in that order.
+        """
+        masses = self.predict_mass(X)
+        betp = masses.betp(list(self.frame_.singletons))
+        return self.classes_[np.argmax(betp, axis=1)]
+
+    # -- learning γ --------------------------------------------------------------------------------------
+    def _leave_one_out(self) -> tuple[np.ndarray, np.ndarray]:
+        """The k nearest other rows of each training row: classes (n, k) and squared distances (n, k).
+
+        The first of k + 1 neighbours is dropped: the row itself, or a duplicate of it at distance 0.
+        """
+        index, sq_dist = self._nearest(self._train, self.k + 1)
+        return self._class_index[index[:, 1:]], sq_dist[:, 1:]
+
+    def loo_cost(self, gamma) -> float:
+        """The leave-one-out cost of ``optimize`` at the given γ, shape (M,), on the training rows.
+
+        (1 / 2n) Σ_rows Σ_c (m({c}) + λ m(Θ) − [y = c])², each training row's masses fused from its
+        k nearest other rows.
+        """
+        self._check_fitted()
+        classes, sq_dist = self._leave_one_out()
+        return self._cost_and_gradient(np.log(np.asarray(gamma, dtype=np.float64)), classes, sq_dist)[0]
+
+    def _cost_and_gradient(self, log_gamma: np.ndarray, classes: np.ndarray,
+                           sq_dist: np.ndarray) -> tuple[float, np.ndarray]:
+        """The leave-one-out cost and its gradient with respect to ln γ, shape (M,).
+
+        With w_c the weight of evidence of class c (:func:`_evidence_weights`) and T_c = m({c}) + λ m(Θ),
+        ∂w_q/∂ln γ_q = −2 γ_q² Σ_{i of class q} d_i² s_i / (1 − s_i); the numerator u_q = e^{w_q} − 1 of
+        m({q}) has ∂u_q/∂w_q = e^{w_q}; and ∂T_c/∂u_q = ([c = q] − T_c) / Z.
+        """
+        n_rows, n_classes = sq_dist.shape[0], self.classes_.shape[0]
+        gamma = np.exp(np.clip(log_gamma, -50.0, 50.0))
+        support, weight = _evidence_weights(sq_dist, classes, gamma, float(self.alpha), n_classes)
+        masses, total = _fused_masses(weight)
+        lam = float(self.ignorance_weight)
+        transformed = masses[:, :-1] + lam * masses[:, -1:]
+        target = np.zeros((n_rows, n_classes))
+        target[np.arange(n_rows), self._class_index] = 1.0
+        residual = transformed - target
+        cost = 0.5 * float((residual ** 2).sum()) / n_rows
+        # ∂cost/∂numerator_q, times the numerator's own derivative e^{w_q} (scaled by e^{−w_max} like Z).
+        slope = (residual - (residual * transformed).sum(axis=1, keepdims=True)) / total[:, None]
+        slope *= np.exp(weight - weight.max(axis=1, keepdims=True))
+        share = sq_dist * support / (1.0 - support)
+        cells = (np.arange(n_rows)[:, None] * n_classes + classes).ravel()
+        fading = np.bincount(cells, weights=share.ravel(), minlength=n_rows * n_classes).reshape(n_rows, n_classes)
+        gradient = (slope * fading).sum(axis=0) * (-2.0 * gamma ** 2) / n_rows
+        return cost, gradient
+
+    def _optimized_gamma(self, start: np.ndarray) -> tuple[np.ndarray, float]:
+        """γ minimising the leave-one-out cost, by BFGS steps on ln γ with a backtracking line search.
+
+        γ stays at or above :data:`GAMMA_FLOOR` (the bound of evtools-dst): below it a class's support
+        hardly depends on distance any more, the cost is flat and the search would wander.  A step
+        changes ln γ by at most :data:`MAX_LOG_STEP`, for the same reason.
+        """
+        classes, sq_dist = self._leave_one_out()
+        floor = math.log(GAMMA_FLOOR)
+        x = np.log(np.maximum(start, GAMMA_FLOOR))
+
+        def evaluate(point):
+            return self._cost_and_gradient(point, classes, sq_dist)
+
+        cost, gradient = evaluate(x)
+        inverse_hessian = np.eye(x.size)
+        for _ in range(int(self.max_iter)):
+            # A γ on the floor that would go lower is held there; the others move.
+            free = ~((x <= floor) & (gradient > 0))
+            if np.max(np.abs(gradient * free)) < 1e-10:
+                break
+            direction = -(inverse_hessian @ (gradient * free)) * free
+            slope = float(gradient @ direction)
+            if slope >= 0:                           # not a descent direction: restart from steepest descent
+                inverse_hessian = np.eye(x.size)
+                direction = -gradient * free
+                slope = float(gradient @ direction)
+            longest = np.max(np.abs(direction))
+            if longest > MAX_LOG_STEP:
+                direction *= MAX_LOG_STEP / longest
+            step = 1.0
+            while True:
+                trial = np.maximum(x + step * direction, floor)
+                trial_cost, trial_gradient = evaluate(trial)
+                if trial_cost <= cost + 1e-4 * float(gradient @ (trial - x)):
+                    break
+                step *= 0.5
+                if step < 1e-12:
+                    return np.exp(x), cost
+            moved, turned = trial - x, trial_gradient - gradient
+            curvature = float(moved @ turned)
+            if curvature > 1e-18:
+                rho = 1.0 / curvature
+                left = np.eye(x.size) - rho * np.outer(moved, turned)
+                inverse_hessian = left @ inverse_hessian @ left.T + rho * np.outer(moved, moved)
+            improvement = cost - trial_cost
+            x, cost, gradient = trial, trial_cost, trial_gradient
+            if improvement <= 1e-15 * max(1.0, abs(cost)):
+                break
+        return np.exp(x), cost
+
+
+# -- likelihoods and counts -----------------------------------------------------------------------------
+def _checked_values(values: Mapping, what: str) -> tuple[tuple[str, ...], np.ndarray]:
+    """Labels (as hypothesis names) and finite non-negative numbers of a mapping ``{label: value}``."""
+    if not isinstance(values, Mapping):
+        raise LearningDataError(f"{what} must be a mapping {{label: number}}, got {type(values).__name__}")
+    if not values:
+        raise LearningDataError(f"{what} is empty: give at least one label")
+    labels = list(values)
+    names = _hypothesis_names(labels)
+    numbers_ = np.array([_check_number(values[label], f"the {what[:-1] if what.endswith('s') else what} of "
+                                                      f"{label!r}") for label in labels])
+    for label, value in zip(labels, numbers_.tolist()):
+        if not math.isfinite(value):
+            raise LearningDataError(f"the value {value!r} of {label!r} in {what} is not a finite number")
+        if value < 0:
+            raise LearningDataError(f"the value {value!r} of {label!r} in {what} is negative")
+    return names, numbers_
+
+
+def consonant_from_likelihood(likelihood: Mapping[Any, float]) -> MassFunction:
+    """Shafer's consonant mass function of a likelihood: pl({θ}) = L(θ) / max L.
+
+    Sort the hypotheses by decreasing likelihood, θ_(1), …, θ_(n), and let π_j = L(θ_(j)) / L(θ_(1)).
+    The focal elements are the nested sets A_j = {θ_(1), …, θ_(j)}, with m(A_j) = π_j − π_(j+1)
+    (π_(n+1) = 0); equal likelihoods give no mass to the sets between them.  The plausibility of a
+    set is the largest π of its members (Shafer 1976, ch. 10).
+
+    Parameters
+    ----------
+    likelihood : mapping of label to float
+        L(θ) ≥ 0 for each hypothesis, in any scale (only ratios matter); at least one positive.
+        The labels, written as strings, are the frame, in the mapping's order.
+
+    Returns
+    -------
+    MassFunction
+        Under Shafer's model of the labels.  A hypothesis of likelihood 0 lies in no focal element.
+
+    Raises
+    ------
+    LearningDataError
+        No labels, a value that is not a number (or a boolean), NaN, infinite or negative, or all
+        values zero.
+
+    Examples
+    --------
+    >>> m = consonant_from_likelihood({"a": 0.8, "b": 0.4, "c": 0.2})
+    >>> m
+    MassFunction({'a': 0.5, 'a|b': 0.25, 'a|b|c': 0.25}, frame=['a', 'b', 'c'])
+    >>> m.pls(["a", "b", "c"])
+    array([1.  , 0.5 , 0.25])
+    """
+    names, values = _checked_values(likelihood, "likelihoods")
+    top = values.max()
+    if top <= 0:
+        raise LearningDataError("every likelihood is zero: a consonant mass function needs one positive value")
+    plausibility = values / top
+    # Decreasing plausibility, ties kept in the mapping's order, so that the result does not depend on sorting.
+    order = np.argsort(-plausibility, kind="stable")
+    ranked = plausibility[order]
+    drops = ranked - np.append(ranked[1:], 0.0)
+    masses: dict[str, float] = {}
+    for j, drop in enumerate(drops.tolist()):
+        if drop > 0:
+            masses["|".join(names[i] for i in order[:j + 1])] = drop
+    return MassFunction(masses, frame=list(names), model="shafer")
+
+
+def idm_from_counts(counts: Mapping[Any, float], s: float = 2.0) -> MassFunction:
+    """The imprecise Dirichlet model of counts: m({θ_i}) = n_i / (N + s), m(Θ) = s / (N + s).
+
+    Its belief and plausibility of θ_i are Walley's lower and upper probabilities n_i / (N + s) and
+    (n_i + s) / (N + s), with N = Σ n_i; s sets how fast the interval shrinks as counts accrue
+    (Walley suggests 1 or 2).
+
+    Parameters
+    ----------
+    counts : mapping of label to float
+        n_i ≥ 0 per hypothesis (fractional counts are allowed); the labels, written as strings,
+        are the frame, in the mapping's order.  All zero gives the vacuous mass function.
+    s : float
+        The prior strength, s > 0.
+
+    Returns
+    -------
+    MassFunction
+        Under Shafer's model of the labels.
+
+    Raises
+    ------
+    LearningDataError
+        No labels, or a count that is not a number, NaN, infinite or negative.
+    LearningOptionError
+        s not a finite number above 0.
+
+    Examples
+    --------
+    >>> m = idm_from_counts({"red": 6, "blue": 2, "green": 0})
+    >>> m
+    MassFunction({'red': 0.6, 'blue': 0.2, 'red|blue|green': 0.2}, frame=['red', 'blue', 'green'])
+    >>> m.bel("red"), m.pls("red")
+    (0.6, 0.8)
+    """
+    if not _is_real(s) or not (math.isfinite(s) and s > 0):
+        raise LearningOptionError(f"s must be a finite number above 0, got {s!r}")
+    names, values = _checked_values(counts, "counts")
+    scale = float(values.sum()) + float(s)
+    masses = {name: value / scale for name, value in zip(names, values.tolist()) if value > 0}
+    whole = "|".join(names)
+    masses[whole] = masses.get(whole, 0.0) + float(s) / scale
+    return MassFunction(masses, frame=list(names), model="shafer")
