@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
 from collections.abc import Mapping
 from typing import Any
 
@@ -195,7 +196,7 @@ def _block_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.sqrt(squares, out=squares)
 
 
-def mean_pairwise_distance(rows: np.ndarray, use_scipy: bool = True) -> float:
+def mean_pairwise_distance(rows: np.ndarray, use_scipy: bool = True, threads: int | None = 1) -> float:
     """The mean Euclidean distance over the n(n − 1)/2 pairs of rows, without an (n, n) matrix.
 
     Parameters
@@ -205,6 +206,9 @@ def mean_pairwise_distance(rows: np.ndarray, use_scipy: bool = True) -> float:
     use_scipy : bool
         Use ``scipy.spatial.distance.cdist`` on each block when scipy is installed (faster);
         otherwise numpy.  Both compute each distance from the differences of the rows.
+    threads : int or None
+        Threads that compute blocks side by side (both kernels release the GIL); None for one per
+        core.  The blocks' sums are added in one fixed order, so the result does not depend on it.
 
     Returns
     -------
@@ -222,17 +226,37 @@ def mean_pairwise_distance(rows: np.ndarray, use_scipy: bool = True) -> float:
     n = rows.shape[0]
     # Centred rows keep the block sums in the scale of the spread, whatever the offset of the data.
     rows = rows - rows.mean(axis=0)
-    starts = range(0, n, PAIR_BLOCK_ROWS)
-    total = 0.0
-    for first in starts:
-        block = rows[first:first + PAIR_BLOCK_ROWS]
-        total += 0.5 * float(distances(block, block).sum())
-        for second in range(first + PAIR_BLOCK_ROWS, n, PAIR_BLOCK_ROWS):
-            total += float(distances(block, rows[second:second + PAIR_BLOCK_ROWS]).sum())
-    return total / (n * (n - 1) / 2)
+    size = PAIR_BLOCK_ROWS
+    pairs = [(first, second) for first in range(0, n, size) for second in range(first, n, size)]
+
+    def block_sum(pair: tuple[int, int]) -> float:
+        first, second = pair
+        total = float(distances(rows[first:first + size], rows[second:second + size]).sum())
+        return 0.5 * total if first == second else total
+
+    workers = _thread_count(threads, len(pairs))
+    if workers == 1:
+        sums = [block_sum(pair) for pair in pairs]
+    else:
+        from concurrent.futures import ThreadPoolExecutor
+
+        with ThreadPoolExecutor(workers) as pool:
+            sums = list(pool.map(block_sum, pairs))
+    return math.fsum(sums) / (n * (n - 1) / 2)
 
 
-def default_gamma(X: np.ndarray, class_index: np.ndarray, n_classes: int, use_scipy: bool = True) -> np.ndarray:
+def _thread_count(threads: int | None, tasks: int) -> int:
+    """The threads to use for ``tasks`` pieces of work: ``threads``, or one per core for None."""
+    if threads is None:
+        try:
+            threads = len(os.sched_getaffinity(0))
+        except AttributeError:  # pragma: no cover - not on Linux
+            threads = os.cpu_count() or 1
+    return max(1, min(int(threads), tasks))
+
+
+def default_gamma(X: np.ndarray, class_index: np.ndarray, n_classes: int, use_scipy: bool = True,
+                  threads: int | None = 1) -> np.ndarray:
     """The per-class γ of Denœux's evclass package and of evtools-dst: γ_c = 1 / √(mean distance in class c).
 
     Parameters
@@ -243,7 +267,7 @@ def default_gamma(X: np.ndarray, class_index: np.ndarray, n_classes: int, use_sc
         The class of each row, 0 to M − 1.
     n_classes : int
         M.
-    use_scipy : bool
+    use_scipy, threads :
         As for :func:`mean_pairwise_distance`.
 
     Returns
@@ -262,7 +286,7 @@ def default_gamma(X: np.ndarray, class_index: np.ndarray, n_classes: int, use_sc
         members = X[class_index == c]
         if members.shape[0] < 2:
             continue
-        mean = mean_pairwise_distance(members, use_scipy=use_scipy)
+        mean = mean_pairwise_distance(members, use_scipy=use_scipy, threads=threads)
         if mean > 0:
             gamma[c] = 1.0 / math.sqrt(mean)
     return gamma
@@ -334,6 +358,10 @@ class EKNN:
         over blocks of query rows, or the tree when scipy is installed.  Both give the same
         neighbours except for rows at equal distance.
 
+    threads : int or None
+        Threads for the distances of the default γ and for the k-d tree's queries; None for one
+        per core.  The results do not depend on it.
+
     Attributes
     ----------
     classes_ : ndarray, shape (M,)
@@ -369,7 +397,8 @@ class EKNN:
     """
 
     def __init__(self, k: int = 5, alpha: float = 0.95, gamma=None, optimize: bool = False, *,
-                 ignorance_weight: float = 1.0, max_iter: int = 100, neighbours: str = "auto") -> None:
+                 ignorance_weight: float = 1.0, max_iter: int = 100, neighbours: str = "auto",
+                 threads: int | None = None) -> None:
         self.k = k
         self.alpha = alpha
         self.gamma = gamma
@@ -377,6 +406,7 @@ class EKNN:
         self.ignorance_weight = ignorance_weight
         self.max_iter = max_iter
         self.neighbours = neighbours
+        self.threads = threads
 
     def __repr__(self) -> str:
         return (f"EKNN(k={self.k!r}, alpha={self.alpha!r}, gamma={self.gamma!r}, optimize={self.optimize!r})")
@@ -398,6 +428,8 @@ class EKNN:
             raise LearningOptionError(f"ignorance_weight (λ) must be a number in [0, 1], got {weight!r}")
         if not _is_integer(self.max_iter) or self.max_iter < 0:
             raise LearningOptionError(f"max_iter must be a non-negative integer, got {self.max_iter!r}")
+        if self.threads is not None and (not _is_integer(self.threads) or self.threads < 1):
+            raise LearningOptionError(f"threads must be None or a positive integer, got {self.threads!r}")
         if self.neighbours not in NEIGHBOUR_SEARCHES:
             raise LearningOptionError(f"neighbours must be one of {', '.join(NEIGHBOUR_SEARCHES)}; "
                                       f"got {self.neighbours!r}")
@@ -478,7 +510,8 @@ class EKNN:
         self._tree = _scipy_spatial().cKDTree(X) if search == "kdtree" else None
         gamma = self._given_gamma(classes.shape[0])
         if gamma is None:
-            gamma = default_gamma(X, self._class_index, classes.shape[0], use_scipy=search == "kdtree")
+            gamma = default_gamma(X, self._class_index, classes.shape[0], use_scipy=search == "kdtree",
+                                  threads=self.threads)
         self.loo_cost_ = math.nan
         if self.optimize:
             gamma, self.loo_cost_ = self._optimized_gamma(gamma)
@@ -489,7 +522,7 @@ class EKNN:
         """Indices (N, k) of the k nearest training rows and their squared distances, nearest first."""
         if self._tree is None:
             return _nearest_blocked(self._train, queries, k)
-        distance, index = self._tree.query(queries, k=k)
+        distance, index = self._tree.query(queries, k=k, workers=_thread_count(self.threads, queries.shape[0]))
         if k == 1:
             distance, index = distance[:, None], index[:, None]
         return index, distance ** 2
