@@ -13,7 +13,9 @@ on top of the defaults, run as a user runs it:
 * every scene of :data:`belief_tracking.scenes.PRESETS`, automatic (no ground truth
   given to the tracker, the background first learns from 50 frames spread over the scene,
   as ``belief track`` without an init file);
-* PETS 2009 S2.L1 frames 1-200 three ways: born from the ground truth (``--init-from-gt``),
+* PETS 2009 S2.L1 frames 1-200 three ways: born from the ground truth (``--init-from-gt``:
+  the background learns from 50 frames and the blobs follow the planned tracks,
+  :data:`~belief_tracking.initiation.FOLLOW_PLAN`, with the candidate's initiation settings),
   automatic, and automatic with the MOT15 public detections of ``det.txt``
   (``--detections``).
 
@@ -77,7 +79,7 @@ def run(job: tuple) -> tuple:
     from belief_tracking import scenes
     from belief_tracking.config import TrackerConfig
     from belief_tracking.evaluation import evaluate
-    from belief_tracking.initiation import init_from_gt
+    from belief_tracking.initiation import FOLLOW_PLAN, init_from_gt, settings_of
     from belief_tracking.tracker import Tracker
 
     name, task, seed, data = job
@@ -87,9 +89,11 @@ def run(job: tuple) -> tuple:
         frames, gt, boxes = _pets(Path(data))
         how = task.split(" ", 1)[1]
         if how == "gt":
-            # As --init-from-gt: every birth and death from the ground truth, no automatic tracks.
+            # As --init-from-gt (runner.run_config): every birth and death from the ground truth, no
+            # automatic tracks; the candidates follow the planned tracks, with the candidate's settings.
             plan = init_from_gt(gt)
-            settings.pop("initiation", None)
+            settings["initiation"] = {**settings_of(FOLLOW_PLAN), **settings.get("initiation", {})}
+            settings.setdefault("warm_up", WARM_UP)
         detections = boxes if how == "detections" else None
     else:
         scene = scenes.render(scenes.PRESETS[task](seed))
