@@ -146,6 +146,18 @@ def test_mean_pairwise_distance_over_blocks(monkeypatch, use_scipy):
     assert mean_pairwise_distance(rows, use_scipy=use_scipy) == pytest.approx(brute, rel=1e-9)
 
 
+@pytest.mark.parametrize("use_scipy", [True, False])
+def test_threads_do_not_change_the_mean(monkeypatch, use_scipy):
+    monkeypatch.setattr(learn, "PAIR_BLOCK_ROWS", 16)
+    rows = np.random.default_rng(4).normal(size=(100, 4))
+    one = mean_pairwise_distance(rows, use_scipy=use_scipy, threads=1)
+    assert mean_pairwise_distance(rows, use_scipy=use_scipy, threads=2) == one
+    assert mean_pairwise_distance(rows, use_scipy=use_scipy, threads=None) == one
+    X, y = rows, np.array(["a", "b"] * 50)
+    assert EKNN(threads=2).fit(X, y).predict_mass(rows).values.tolist() == \
+        EKNN(threads=1).fit(X, y).predict_mass(rows).values.tolist()
+
+
 def test_default_gamma_falls_back_to_one():
     X = np.array([[0.0, 0.0], [3.0, 4.0], [7.0, 7.0], [7.0, 7.0], [9.0, 9.0]])
     gamma = default_gamma(X, np.array([0, 0, 1, 1, 2]), 3)
@@ -300,6 +312,8 @@ def test_bad_training_data_is_refused(X, y, message):
     (dict(ignorance_weight=2.0), "in [0, 1]"),
     (dict(max_iter=-1), "max_iter"),
     (dict(neighbours="brute"), "neighbours must be one of auto, kdtree, blocked"),
+    (dict(threads=0), "threads must be None or a positive integer"),
+    (dict(threads=1.5), "threads must be None or a positive integer"),
 ])
 def test_bad_options_are_refused(options, message):
     with pytest.raises(LearningOptionError) as caught:
@@ -325,6 +339,18 @@ def test_consonant_from_likelihood_by_hand():
     assert m.frame.hypotheses == ("a", "b", "c", "d") and m.model.kind == "shafer"
     assert m.to_mapping() == pytest.approx({"b": 0.5, "b|c": 1 / 6, "a|b|c": 1 / 3})
     np.testing.assert_allclose(m.pls(["a", "b", "c", "d"]), [1 / 3, 1.0, 0.5, 0.0], atol=1e-15)
+
+
+def test_the_frame_of_another_source():
+    frame = ["bent", "cracked", "good"]
+    m = consonant_from_likelihood({"good": 0.5, "bent": 1.0}, frame=frame)
+    assert m.frame.hypotheses == tuple(frame) and m.to_mapping() == {"bent": 0.5, "bent|good": 0.5}
+    counts = idm_from_counts({}, frame=frame)
+    assert counts.frame.hypotheses == tuple(frame) and counts.to_mapping() == {"bent|cracked|good": 1.0}
+    with pytest.raises(LearningDataError, match="likelihoods name 'rusty', which the frame"):
+        consonant_from_likelihood({"rusty": 1.0}, frame=frame)
+    with pytest.raises(LearningDataError, match="every likelihood is zero"):
+        consonant_from_likelihood({}, frame=frame)
 
 
 def test_consonant_ties_and_a_single_label():

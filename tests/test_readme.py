@@ -17,6 +17,7 @@ PAGES_WITH_EXAMPLES = {
     "docs/rules.md",
     "docs/tutorials/fusion.md",
     "docs/tutorials/tracking.md",
+    "docs/tutorials/learning.md",
     "docs/experiments.md",
 }
 
