@@ -43,6 +43,8 @@ __all__ = [
     "LearningOptionError",
     "NotFittedError",
     "NEIGHBOUR_SEARCHES",
+    "default_gamma",
+    "mean_pairwise_distance",
 ]
 
 #: The neighbour searches of :class:`EKNN`: ``"kdtree"`` needs scipy, ``"blocked"`` is numpy only.
@@ -55,7 +57,7 @@ DISTANCE_BLOCK_ENTRIES = 1_000_000
 #: The smallest γ that ``optimize`` reaches (as in evtools-dst).
 GAMMA_FLOOR = 1e-4
 #: The largest change of ln γ in one step of ``optimize``.
-MAX_LOG_STEP = 1.0
+LONGEST_LOG_STEP = 1.0
 #: Rows of one class compared at once for the default γ: blocks of PAIR_BLOCK_ROWS² distances (8 MB).
 PAIR_BLOCK_ROWS = 1024
 
@@ -158,8 +160,8 @@ def _fused_masses(class_weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     -------
     masses : ndarray, shape (N, M + 1)
         m({c_1}), …, m({c_M}), m(Θ) per row.
-    scaled_theta : ndarray, shape (N,)
-        exp(−w_max) / Z, the normaliser's share the gradient of the training cost needs.
+    scaled_total : ndarray, shape (N,)
+        The normaliser Z times exp(−w_max) / Π_c P_c, which the gradient of the training cost needs.
     """
     top = class_weight.max(axis=1, keepdims=True)
     singles = np.exp(class_weight - top) * -np.expm1(-class_weight)
@@ -433,7 +435,7 @@ class EKNN:
         if self.neighbours not in NEIGHBOUR_SEARCHES:
             raise LearningOptionError(f"neighbours must be one of {', '.join(NEIGHBOUR_SEARCHES)}; "
                                       f"got {self.neighbours!r}")
-        if self.neighbours == "kdtree" and _scipy_spatial() is None:  # pragma: no cover - scipy is installed
+        if self.neighbours == "kdtree" and _scipy_spatial() is None:
             raise LearningOptionError("neighbours='kdtree' needs scipy; install it or use neighbours='blocked'")
 
     def _given_gamma(self, n_classes: int) -> np.ndarray | None:
@@ -632,7 +634,7 @@ class EKNN:
 
         γ stays at or above :data:`GAMMA_FLOOR` (the bound of evtools-dst): below it a class's support
         hardly depends on distance any more, the cost is flat and the search would wander.  A step
-        changes ln γ by at most :data:`MAX_LOG_STEP`, for the same reason.
+        changes ln γ by at most :data:`LONGEST_LOG_STEP`, for the same reason.
         """
         classes, sq_dist = self._leave_one_out()
         floor = math.log(GAMMA_FLOOR)
@@ -655,8 +657,8 @@ class EKNN:
                 direction = -gradient * free
                 slope = float(gradient @ direction)
             longest = np.max(np.abs(direction))
-            if longest > MAX_LOG_STEP:
-                direction *= MAX_LOG_STEP / longest
+            if longest > LONGEST_LOG_STEP:
+                direction *= LONGEST_LOG_STEP / longest
             step = 1.0
             while True:
                 trial = np.maximum(x + step * direction, floor)

@@ -206,6 +206,17 @@ def test_the_searches_agree_in_blocks(monkeypatch):
         EKNN(k=300).fit(X, y).predict_mass(queries).values, abs=1e-13)
 
 
+def test_without_scipy_the_numpy_search_and_distances_serve(monkeypatch):
+    case = FIXTURES["cases"]["three_classes"]
+    monkeypatch.setattr(learn, "_scipy_spatial", lambda: None)
+    clf = EKNN(k=case["k"]).fit(case["X_train"], case["y_train"])
+    assert clf._search == "blocked" and clf._tree is None
+    np.testing.assert_allclose(clf.gamma_, case["gamma"], rtol=1e-13, atol=0)
+    np.testing.assert_allclose(clf.predict_mass(case["X_test"]).values, case["masses"], rtol=0, atol=1e-9)
+    with pytest.raises(LearningOptionError, match="neighbours='kdtree' needs scipy"):
+        EKNN(k=2, neighbours="kdtree").fit(GOOD_X, GOOD_Y)
+
+
 def test_integer_labels_and_an_empty_query():
     clf = EKNN(k=2).fit([[0.0], [1.0], [5.0], [6.0]], np.array([10, 10, 20, 20]))
     assert clf.frame_.hypotheses == ("10", "20") and clf.predict([[0.2], [5.5]]).tolist() == [10, 20]
