@@ -19,6 +19,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import belief.learn as learn
+import belief.learn.distances as learn_distances
+import belief.learn.eknn as learn_eknn
 from belief import BeliefError, MassBatch, MassFunction, combine
 from belief.learn import (EKNN, LearningDataError, LearningOptionError, NotFittedError, consonant_from_likelihood,
                           default_gamma, idm_from_counts, mean_pairwise_distance)
@@ -132,7 +134,7 @@ def test_optimize_starts_from_a_given_gamma_and_keeps_it_above_the_floor():
 
 
 def learnt_floor() -> float:
-    return learn.GAMMA_FLOOR * (1 - 1e-12)
+    return learn_eknn.GAMMA_FLOOR * (1 - 1e-12)
 
 
 # -- the default γ and the neighbour searches -----------------------------------------------------------------
@@ -142,13 +144,13 @@ def test_mean_pairwise_distance_over_blocks(monkeypatch, use_scipy):
     rows = 1e6 + rng.normal(size=(23, 3))                  # an offset far larger than the spread
     brute = np.mean([np.linalg.norm(rows[i] - rows[j]) for i in range(23) for j in range(i + 1, 23)])
     assert mean_pairwise_distance(rows, use_scipy=use_scipy) == pytest.approx(brute, rel=1e-9)
-    monkeypatch.setattr(learn, "PAIR_BLOCK_ROWS", 5)         # blocks of 5 rows: diagonal, off-diagonal, ragged end
+    monkeypatch.setattr(learn_distances, "PAIR_BLOCK_ROWS", 5)    # diagonal, off-diagonal and ragged blocks
     assert mean_pairwise_distance(rows, use_scipy=use_scipy) == pytest.approx(brute, rel=1e-9)
 
 
 @pytest.mark.parametrize("use_scipy", [True, False])
 def test_threads_do_not_change_the_mean(monkeypatch, use_scipy):
-    monkeypatch.setattr(learn, "PAIR_BLOCK_ROWS", 16)
+    monkeypatch.setattr(learn_distances, "PAIR_BLOCK_ROWS", 16)
     rows = np.random.default_rng(4).normal(size=(100, 4))
     one = mean_pairwise_distance(rows, use_scipy=use_scipy, threads=1)
     assert mean_pairwise_distance(rows, use_scipy=use_scipy, threads=2) == one
@@ -196,8 +198,8 @@ def test_the_searches_agree_in_blocks(monkeypatch):
     tree = EKNN(k=7).fit(X, y)
     assert tree._search == "kdtree"
     whole = tree.predict_mass(queries).values
-    monkeypatch.setattr(learn, "QUERY_BLOCK_ROWS", 10)
-    monkeypatch.setattr(learn, "DISTANCE_BLOCK_ENTRIES", 1000)      # 3 query rows at a time
+    monkeypatch.setattr(learn_eknn, "QUERY_BLOCK_ROWS", 10)
+    monkeypatch.setattr(learn_distances, "DISTANCE_BLOCK_ENTRIES", 1000)      # 3 query rows at a time
     blocked = EKNN(k=7, neighbours="blocked").fit(X, y)
     np.testing.assert_allclose(blocked.gamma_, tree.gamma_, rtol=1e-13)
     np.testing.assert_allclose(blocked.predict_mass(queries).values, whole, rtol=0, atol=1e-15)
@@ -208,7 +210,7 @@ def test_the_searches_agree_in_blocks(monkeypatch):
 
 def test_without_scipy_the_numpy_search_and_distances_serve(monkeypatch):
     case = FIXTURES["cases"]["three_classes"]
-    monkeypatch.setattr(learn, "_scipy_spatial", lambda: None)
+    monkeypatch.setattr(learn_distances, "scipy_spatial", lambda: None)
     clf = EKNN(k=case["k"]).fit(case["X_train"], case["y_train"])
     assert clf._search == "blocked" and clf._tree is None
     np.testing.assert_allclose(clf.gamma_, case["gamma"], rtol=1e-13, atol=0)

@@ -1,138 +1,31 @@
-"""Mass functions learnt from data: the evidential k-nearest-neighbour classifier, likelihoods and counts.
-
-* :class:`EKNN`: Denœux's evidential k-nearest-neighbour rule (1995).  Each of the k training rows
-  nearest to a query is a piece of evidence for its own class, the weaker the farther it lies, and
-  the k pieces are fused by Dempster's rule.  Fit it on labelled rows, then ask for a
-  :class:`~belief.batch.MassBatch` per query set (:meth:`EKNN.predict_mass`) or for labels
-  (:meth:`EKNN.predict`), in the manner of scikit-learn (which is not needed).
-* :func:`consonant_from_likelihood`: Shafer's consonant mass function whose plausibility of each
-  hypothesis is its normalised likelihood.
-* :func:`idm_from_counts`: the imprecise Dirichlet model of observed counts.
-
-Every result lives under Shafer's model of a frame whose hypotheses are the class labels (written
-as strings), so it can be fused with any other source on that frame by :func:`~belief.rules.combine`.
-
-References: T. Denœux, *A k-nearest neighbor classification rule based on Dempster–Shafer theory*,
-IEEE Trans. SMC 25(5), 1995; L. M. Zouhal and T. Denœux, *An evidence-theoretic k-NN rule with
-parameter optimization*, IEEE Trans. SMC C 28(2), 1998; G. Shafer, *A Mathematical Theory of
-Evidence*, 1976, ch. 10; P. Walley, *Inferences from multinomial data: learning about a bag of
-marbles*, JRSS B 58(1), 1996.
-"""
+"""Denœux's evidential k-nearest-neighbour classifier, :class:`EKNN`, and the closed form of its fusion."""
 
 from __future__ import annotations
 
 import math
-import numbers
-import os
-from collections.abc import Mapping
-from typing import Any
 
 import numpy as np
 
 from belief.batch import MassBatch
-from belief.errors import BeliefError, FrameError
 from belief.frame import Frame
-from belief.mass import MassFunction
+import belief.learn.distances as distances
+from belief.learn.inputs import (LearningDataError, LearningOptionError, NotFittedError, check_rows, hypothesis_names,
+                                 is_integer, is_real)
 from belief.model import Model
 
-__all__ = [
-    "EKNN",
-    "consonant_from_likelihood",
-    "idm_from_counts",
-    "LearningDataError",
-    "LearningOptionError",
-    "NotFittedError",
-    "NEIGHBOUR_SEARCHES",
-    "default_gamma",
-    "mean_pairwise_distance",
-]
+__all__ = ["EKNN", "NEIGHBOUR_SEARCHES", "QUERY_BLOCK_ROWS", "GAMMA_FLOOR", "LONGEST_LOG_STEP"]
 
 #: The neighbour searches of :class:`EKNN`: ``"kdtree"`` needs scipy, ``"blocked"`` is numpy only.
 NEIGHBOUR_SEARCHES = ("auto", "kdtree", "blocked")
-
 #: Query rows handled at once by :meth:`EKNN.predict_mass` (the k-d tree answers them in one call).
 QUERY_BLOCK_ROWS = 65_536
-#: Distances held at once by the numpy neighbour search: a block of queries times the training rows.
-DISTANCE_BLOCK_ENTRIES = 1_000_000
 #: The smallest γ that ``optimize`` reaches (as in evtools-dst).
 GAMMA_FLOOR = 1e-4
 #: The largest change of ln γ in one step of ``optimize``.
 LONGEST_LOG_STEP = 1.0
-#: Rows of one class compared at once for the default γ: blocks of PAIR_BLOCK_ROWS² distances (8 MB).
-PAIR_BLOCK_ROWS = 1024
 
 
-class LearningDataError(BeliefError, ValueError):
-    """Data given to :mod:`belief.learn` are malformed: training or query rows, labels, likelihoods or counts."""
-
-
-class LearningOptionError(BeliefError, ValueError):
-    """A parameter of :mod:`belief.learn` is out of its range (k, α, γ, λ, s, the neighbour search)."""
-
-
-class NotFittedError(BeliefError, ValueError, AttributeError):
-    """A classifier is asked for predictions before :meth:`EKNN.fit` has run."""
-
-
-# -- input checks ---------------------------------------------------------------------------------
-def _check_rows(X, what: str, n_features: int | None = None) -> np.ndarray:
-    """``X`` as a finite float array of shape (N, p), or a :class:`LearningDataError` that says what is wrong."""
-    try:
-        array = np.asarray(X, dtype=np.float64)
-    except (TypeError, ValueError) as err:
-        raise LearningDataError(f"{what} must be an array of numbers of shape (N, p): {err}") from None
-    if np.asarray(X).dtype == bool:
-        raise LearningDataError(f"{what} must hold numbers, not booleans")
-    if array.ndim != 2:
-        raise LearningDataError(f"{what} must have shape (N, p), one row per sample, got shape {array.shape}")
-    if n_features is not None and array.shape[1] != n_features:
-        raise LearningDataError(f"{what} has {array.shape[1]} features, but the classifier was fitted on {n_features}")
-    if array.shape[1] == 0:
-        raise LearningDataError(f"{what} has no features (shape {array.shape})")
-    bad = ~np.isfinite(array)
-    if bad.any():
-        row, col = map(int, np.argwhere(bad)[0])
-        raise LearningDataError(f"{what} holds {float(array[row, col])!r} in row {row}, feature {col}; "
-                                "every value must be a finite number")
-    return array
-
-
-def _hypothesis_names(labels) -> tuple[str, ...]:
-    """The labels written as hypothesis names, refused when two coincide or one cannot name a hypothesis."""
-    names = tuple(str(label) for label in labels)
-    if len(set(names)) != len(names):
-        seen: dict[str, Any] = {}
-        for label, name in zip(labels, names):
-            if name in seen:
-                raise LearningDataError(f"the labels {seen[name]!r} and {label!r} are both written {name!r}; "
-                                        "each label must have a name of its own")
-            seen[name] = label
-    for label, name in zip(labels, names):
-        try:
-            Frame([name])
-        except FrameError as err:
-            raise LearningDataError(f"the label {label!r} cannot name a hypothesis: {err}") from None
-    return names
-
-
-def _is_integer(value) -> bool:
-    """An int or numpy integer, not a boolean."""
-    return isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))
-
-
-def _is_real(value) -> bool:
-    """A real number (int, float, numpy number), not a boolean and not a string."""
-    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
-
-
-def _check_number(value, what: str) -> float:
-    """A real number (not a boolean, not a string) as a float."""
-    if not _is_real(value):
-        raise LearningDataError(f"{what} must be a number, got {value!r}")
-    return float(value)
-
-
-# -- the EK-NN closed form ----------------------------------------------------------------------------
+# -- the closed form of the fusion ------------------------------------------------------------------
 def _evidence_weights(sq_dist: np.ndarray, neighbour_class: np.ndarray, gamma: np.ndarray, alpha: float,
                       n_classes: int) -> tuple[np.ndarray, np.ndarray]:
     """Supports s_i = α exp(−γ_c² d_i²) of the neighbours, shape (N, k), and the weight of evidence per class.
@@ -171,151 +64,6 @@ def _fused_masses(class_weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     np.divide(singles, total, out=masses[:, :-1])
     np.divide(theta, total, out=masses[:, -1:])
     return masses, total[:, 0]
-
-
-# -- distances ------------------------------------------------------------------------------------------
-def _scipy_spatial():
-    """scipy.spatial if scipy is installed, else None: scipy only makes things faster."""
-    try:
-        import scipy.spatial
-        import scipy.spatial.distance
-    except ImportError:  # pragma: no cover - the test venv has scipy; the numpy paths are tested by name
-        return None
-    return scipy.spatial
-
-
-def _block_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Euclidean distances between the rows of a (n_a, p) and b (n_b, p), shape (n_a, n_b), from differences.
-
-    Differences, not the expansion |a|² + |b|² − 2a·b, which loses the distances of close rows.
-    """
-    squares = np.zeros((a.shape[0], b.shape[0]))
-    step = np.empty_like(squares)
-    for feature in range(a.shape[1]):
-        np.subtract(a[:, feature, None], b[None, :, feature], out=step)
-        step *= step
-        squares += step
-    return np.sqrt(squares, out=squares)
-
-
-def mean_pairwise_distance(rows: np.ndarray, use_scipy: bool = True, threads: int | None = 1) -> float:
-    """The mean Euclidean distance over the n(n − 1)/2 pairs of rows, without an (n, n) matrix.
-
-    Parameters
-    ----------
-    rows : ndarray, shape (n, p)
-        n ≥ 2 rows.
-    use_scipy : bool
-        Use ``scipy.spatial.distance.cdist`` on each block when scipy is installed (faster);
-        otherwise numpy.  Both compute each distance from the differences of the rows.
-    threads : int or None
-        Threads that compute blocks side by side (both kernels release the GIL); None for one per
-        core.  The blocks' sums are added in one fixed order, so the result does not depend on it.
-
-    Returns
-    -------
-    float
-        (2 / (n (n − 1))) Σ_{i<j} ‖x_i − x_j‖, summed block by block over blocks of
-        :data:`PAIR_BLOCK_ROWS` rows: a diagonal block holds each pair twice, a block above it once.
-
-    Examples
-    --------
-    >>> mean_pairwise_distance(np.array([[0.0, 0.0], [3.0, 4.0], [6.0, 8.0]]))  # (5 + 10 + 5) / 3
-    6.666666666666667
-    """
-    spatial = _scipy_spatial() if use_scipy else None
-    distances = spatial.distance.cdist if spatial is not None else _block_distances
-    n = rows.shape[0]
-    # Centred rows keep the block sums in the scale of the spread, whatever the offset of the data.
-    rows = rows - rows.mean(axis=0)
-    size = PAIR_BLOCK_ROWS
-    pairs = [(first, second) for first in range(0, n, size) for second in range(first, n, size)]
-
-    def block_sum(pair: tuple[int, int]) -> float:
-        first, second = pair
-        total = float(distances(rows[first:first + size], rows[second:second + size]).sum())
-        return 0.5 * total if first == second else total
-
-    workers = _thread_count(threads, len(pairs))
-    if workers == 1:
-        sums = [block_sum(pair) for pair in pairs]
-    else:
-        from concurrent.futures import ThreadPoolExecutor
-
-        with ThreadPoolExecutor(workers) as pool:
-            sums = list(pool.map(block_sum, pairs))
-    return math.fsum(sums) / (n * (n - 1) / 2)
-
-
-def _thread_count(threads: int | None, tasks: int) -> int:
-    """The threads to use for ``tasks`` pieces of work: ``threads``, or one per core for None."""
-    if threads is None:
-        try:
-            threads = len(os.sched_getaffinity(0))
-        except AttributeError:  # pragma: no cover - not on Linux
-            threads = os.cpu_count() or 1
-    return max(1, min(int(threads), tasks))
-
-
-def default_gamma(X: np.ndarray, class_index: np.ndarray, n_classes: int, use_scipy: bool = True,
-                  threads: int | None = 1) -> np.ndarray:
-    """The per-class γ of Denœux's evclass package and of evtools-dst: γ_c = 1 / √(mean distance in class c).
-
-    Parameters
-    ----------
-    X : ndarray, shape (n, p)
-        Training rows.
-    class_index : ndarray of int, shape (n,)
-        The class of each row, 0 to M − 1.
-    n_classes : int
-        M.
-    use_scipy, threads :
-        As for :func:`mean_pairwise_distance`.
-
-    Returns
-    -------
-    ndarray, shape (M,)
-        γ_c² = 1 / (mean Euclidean distance, not squared, between two rows of class c); γ_c = 1
-        for a class of fewer than two rows or of identical rows.
-
-    Examples
-    --------
-    >>> default_gamma(np.array([[0.0], [4.0], [1.0]]), np.array([0, 0, 1]), 2)  # class 0: mean distance 4
-    array([0.5, 1. ])
-    """
-    gamma = np.ones(n_classes)
-    for c in range(n_classes):
-        members = X[class_index == c]
-        if members.shape[0] < 2:
-            continue
-        mean = mean_pairwise_distance(members, use_scipy=use_scipy, threads=threads)
-        if mean > 0:
-            gamma[c] = 1.0 / math.sqrt(mean)
-    return gamma
-
-
-def _nearest_blocked(train: np.ndarray, queries: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """The k nearest training rows of each query by numpy alone, in blocks of queries.
-
-    Returns indices (N, k) and squared distances (N, k), nearest first; ties go to the lower index.
-    """
-    n_train = train.shape[0]
-    rows_at_once = max(1, DISTANCE_BLOCK_ENTRIES // max(n_train, 1))
-    index = np.empty((queries.shape[0], k), dtype=np.intp)
-    sq_dist = np.empty((queries.shape[0], k))
-    for first in range(0, queries.shape[0], rows_at_once):
-        block = queries[first:first + rows_at_once]
-        distance = _block_distances(block, train)
-        if k < n_train:
-            chosen = np.argpartition(distance, k - 1, axis=1)[:, :k]
-            chosen.sort(axis=1)
-        else:
-            chosen = np.broadcast_to(np.arange(n_train), (block.shape[0], n_train))
-        picked = np.take_along_axis(distance, chosen, axis=1)
-        order = np.argsort(picked, axis=1, kind="stable")
-        index[first:first + block.shape[0]] = np.take_along_axis(chosen, order, axis=1)
-        sq_dist[first:first + block.shape[0]] = np.take_along_axis(picked, order, axis=1) ** 2
-    return index, sq_dist
 
 
 # -- the classifier --------------------------------------------------------------------------------------
@@ -415,7 +163,7 @@ class EKNN:
 
     # -- checks --------------------------------------------------------------------------------------
     def _check_options(self, n_rows: int, n_classes: int) -> None:
-        if not _is_integer(self.k) or self.k < 1:
+        if not is_integer(self.k) or self.k < 1:
             raise LearningOptionError(f"k must be a positive integer, got {self.k!r}")
         if self.k > n_rows:
             raise LearningOptionError(f"k = {self.k} neighbours, but there are only {n_rows} training rows")
@@ -423,19 +171,19 @@ class EKNN:
             raise LearningOptionError(f"optimize=True leaves each training row out, so k = {self.k} must be below "
                                       f"the {n_rows} training rows")
         alpha = self.alpha
-        if not _is_real(alpha) or not 0.0 <= alpha < 1.0:
+        if not is_real(alpha) or not 0.0 <= alpha < 1.0:
             raise LearningOptionError(f"alpha must be a number with 0 <= alpha < 1, got {alpha!r}")
         weight = self.ignorance_weight
-        if not _is_real(weight) or not 0.0 <= weight <= 1.0:
+        if not is_real(weight) or not 0.0 <= weight <= 1.0:
             raise LearningOptionError(f"ignorance_weight (λ) must be a number in [0, 1], got {weight!r}")
-        if not _is_integer(self.max_iter) or self.max_iter < 0:
+        if not is_integer(self.max_iter) or self.max_iter < 0:
             raise LearningOptionError(f"max_iter must be a non-negative integer, got {self.max_iter!r}")
-        if self.threads is not None and (not _is_integer(self.threads) or self.threads < 1):
+        if self.threads is not None and (not is_integer(self.threads) or self.threads < 1):
             raise LearningOptionError(f"threads must be None or a positive integer, got {self.threads!r}")
         if self.neighbours not in NEIGHBOUR_SEARCHES:
             raise LearningOptionError(f"neighbours must be one of {', '.join(NEIGHBOUR_SEARCHES)}; "
                                       f"got {self.neighbours!r}")
-        if self.neighbours == "kdtree" and _scipy_spatial() is None:
+        if self.neighbours == "kdtree" and distances.scipy_spatial() is None:
             raise LearningOptionError("neighbours='kdtree' needs scipy; install it or use neighbours='blocked'")
 
     def _given_gamma(self, n_classes: int) -> np.ndarray | None:
@@ -481,7 +229,7 @@ class EKNN:
         LearningOptionError
             An option out of range.
         """
-        X = _check_rows(X, "X")
+        X = check_rows(X, "X")
         labels = np.asarray(y)
         if labels.ndim != 1 or labels.shape[0] != X.shape[0]:
             raise LearningDataError(f"y must hold one label per row of X, shape ({X.shape[0]},), got {labels.shape}")
@@ -496,11 +244,11 @@ class EKNN:
             raise LearningDataError(f"the labels of y cannot be sorted: {err}") from None
         if classes.shape[0] < 2:
             raise LearningDataError(f"y must hold at least two classes, got {classes.tolist()!r}")
-        names = _hypothesis_names(classes.tolist())
+        names = hypothesis_names(classes.tolist())
         self._check_options(X.shape[0], classes.shape[0])
         search = self.neighbours
         if search == "auto":
-            search = "kdtree" if _scipy_spatial() is not None else "blocked"
+            search = "kdtree" if distances.scipy_spatial() is not None else "blocked"
 
         self.classes_ = classes
         self.frame_ = Frame(list(names))
@@ -509,10 +257,10 @@ class EKNN:
         self._train = X
         self._class_index = class_index.reshape(-1).astype(np.intp)
         self._search = search
-        self._tree = _scipy_spatial().cKDTree(X) if search == "kdtree" else None
+        self._tree = distances.scipy_spatial().cKDTree(X) if search == "kdtree" else None
         gamma = self._given_gamma(classes.shape[0])
         if gamma is None:
-            gamma = default_gamma(X, self._class_index, classes.shape[0], use_scipy=search == "kdtree",
+            gamma = distances.default_gamma(X, self._class_index, classes.shape[0], use_scipy=search == "kdtree",
                                   threads=self.threads)
         self.loo_cost_ = math.nan
         if self.optimize:
@@ -523,8 +271,8 @@ class EKNN:
     def _nearest(self, queries: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
         """Indices (N, k) of the k nearest training rows and their squared distances, nearest first."""
         if self._tree is None:
-            return _nearest_blocked(self._train, queries, k)
-        distance, index = self._tree.query(queries, k=k, workers=_thread_count(self.threads, queries.shape[0]))
+            return distances.nearest_blocked(self._train, queries, k)
+        distance, index = self._tree.query(queries, k=k, workers=distances.thread_count(self.threads, queries.shape[0]))
         if k == 1:
             distance, index = distance[:, None], index[:, None]
         return index, distance ** 2
@@ -556,7 +304,7 @@ class EKNN:
             Rows that are not finite numbers, or a number of features other than the training rows'.
         """
         self._check_fitted()
-        queries = _check_rows(X, "X", self.n_features_in_)
+        queries = check_rows(X, "X", self.n_features_in_)
         n_classes = self.classes_.shape[0]
         values = np.empty((queries.shape[0], n_classes + 1))
         for first in range(0, queries.shape[0], QUERY_BLOCK_ROWS):
@@ -679,140 +427,3 @@ class EKNN:
             if improvement <= 1e-15 * max(1.0, abs(cost)):
                 break
         return np.exp(x), cost
-
-
-# -- likelihoods and counts -----------------------------------------------------------------------------
-def _checked_values(values: Mapping, what: str, frame) -> tuple[tuple[str, ...], np.ndarray]:
-    """Hypothesis names and finite non-negative numbers of a mapping ``{label: value}``, in frame order.
-
-    Without a frame the labels are the frame, in the mapping's order; with one, a hypothesis the
-    mapping leaves out has the value 0.
-    """
-    if not isinstance(values, Mapping):
-        raise LearningDataError(f"{what} must be a mapping {{label: number}}, got {type(values).__name__}")
-    if not values and frame is None:
-        raise LearningDataError(f"{what} is empty: give at least one label")
-    labels = list(values)
-    names = _hypothesis_names(labels)
-    one = what[:-1] if what.endswith("s") else what
-    given = {}
-    for label, name in zip(labels, names):
-        value = _check_number(values[label], f"the {one} of {label!r}")
-        if not math.isfinite(value):
-            raise LearningDataError(f"the value {value!r} of {label!r} in {what} is not a finite number")
-        if value < 0:
-            raise LearningDataError(f"the value {value!r} of {label!r} in {what} is negative")
-        given[name] = value
-    if frame is None:
-        return names, np.array([given[name] for name in names])
-    hypotheses = (frame if isinstance(frame, Frame) else Frame(list(frame))).hypotheses
-    unknown = [name for name in names if name not in hypotheses]
-    if unknown:
-        raise LearningDataError(f"{what} name {', '.join(map(repr, unknown))}, which the frame "
-                                f"({', '.join(hypotheses)}) does not have")
-    return hypotheses, np.array([given.get(name, 0.0) for name in hypotheses])
-
-
-def consonant_from_likelihood(likelihood: Mapping[Any, float], frame=None) -> MassFunction:
-    """Shafer's consonant mass function of a likelihood: pl({θ}) = L(θ) / max L.
-
-    Sort the hypotheses by decreasing likelihood, θ_(1), …, θ_(n), and let π_j = L(θ_(j)) / L(θ_(1)).
-    The focal elements are the nested sets A_j = {θ_(1), …, θ_(j)}, with m(A_j) = π_j − π_(j+1)
-    (π_(n+1) = 0); equal likelihoods give no mass to the sets between them.  The plausibility of a
-    set is the largest π of its members (Shafer 1976, ch. 10).
-
-    Parameters
-    ----------
-    likelihood : mapping of label to float
-        L(θ) ≥ 0 for each hypothesis, in any scale (only ratios matter); at least one positive.
-        The labels are written as strings.
-    frame : Frame or sequence of str, optional
-        The frame of the result, to match another source's (e.g. :attr:`EKNN.frame_`); a hypothesis
-        that ``likelihood`` leaves out has likelihood 0.  By default the labels, in the mapping's order.
-
-    Returns
-    -------
-    MassFunction
-        Under Shafer's model of the labels.  A hypothesis of likelihood 0 lies in no focal element.
-
-    Raises
-    ------
-    LearningDataError
-        No labels, a value that is not a number (or a boolean), NaN, infinite or negative, all
-        values zero, or a label that ``frame`` does not have.
-
-    Examples
-    --------
-    >>> m = consonant_from_likelihood({"a": 0.8, "b": 0.4, "c": 0.2})
-    >>> m
-    MassFunction({'a': 0.5, 'a|b': 0.25, 'a|b|c': 0.25}, frame=['a', 'b', 'c'])
-    >>> m.pls(["a", "b", "c"])
-    array([1.  , 0.5 , 0.25])
-    >>> consonant_from_likelihood({"b": 1.0}, frame=["a", "b"]).to_mapping()
-    {'b': 1.0}
-    """
-    names, values = _checked_values(likelihood, "likelihoods", frame)
-    top = values.max()
-    if top <= 0:
-        raise LearningDataError("every likelihood is zero: a consonant mass function needs one positive value")
-    plausibility = values / top
-    # Decreasing plausibility, ties kept in the mapping's order, so that the result does not depend on sorting.
-    order = np.argsort(-plausibility, kind="stable")
-    ranked = plausibility[order]
-    drops = ranked - np.append(ranked[1:], 0.0)
-    masses: dict[str, float] = {}
-    for j, drop in enumerate(drops.tolist()):
-        if drop > 0:
-            masses["|".join(names[i] for i in order[:j + 1])] = drop
-    return MassFunction(masses, frame=list(names), model="shafer")
-
-
-def idm_from_counts(counts: Mapping[Any, float], s: float = 2.0, frame=None) -> MassFunction:
-    """The imprecise Dirichlet model of counts: m({θ_i}) = n_i / (N + s), m(Θ) = s / (N + s).
-
-    Its belief and plausibility of θ_i are Walley's lower and upper probabilities n_i / (N + s) and
-    (n_i + s) / (N + s), with N = Σ n_i; s sets how fast the interval shrinks as counts accrue
-    (Walley suggests 1 or 2).
-
-    Parameters
-    ----------
-    counts : mapping of label to float
-        n_i ≥ 0 per hypothesis (fractional counts are allowed), the labels written as strings.
-        All zero gives the vacuous mass function.
-    s : float
-        The prior strength, s > 0.
-    frame : Frame or sequence of str, optional
-        The frame of the result; a hypothesis that ``counts`` leaves out has count 0.  By default
-        the labels, in the mapping's order.
-
-    Returns
-    -------
-    MassFunction
-        Under Shafer's model of the labels.
-
-    Raises
-    ------
-    LearningDataError
-        No labels, a count that is not a number, NaN, infinite or negative, or a label that
-        ``frame`` does not have.
-    LearningOptionError
-        s not a finite number above 0.
-
-    Examples
-    --------
-    >>> m = idm_from_counts({"red": 6, "blue": 2, "green": 0})
-    >>> m
-    MassFunction({'red': 0.6, 'blue': 0.2, 'red|blue|green': 0.2}, frame=['red', 'blue', 'green'])
-    >>> m.bel("red"), m.pls("red")
-    (0.6, 0.8)
-    >>> idm_from_counts({"blue": 3}, s=1.0, frame=["red", "blue", "green"]).to_mapping()
-    {'blue': 0.75, 'red|blue|green': 0.25}
-    """
-    if not _is_real(s) or not (math.isfinite(s) and s > 0):
-        raise LearningOptionError(f"s must be a finite number above 0, got {s!r}")
-    names, values = _checked_values(counts, "counts", frame)
-    scale = float(values.sum()) + float(s)
-    masses = {name: value / scale for name, value in zip(names, values.tolist()) if value > 0}
-    whole = "|".join(names)
-    masses[whole] = masses.get(whole, 0.0) + float(s) / scale
-    return MassFunction(masses, frame=list(names), model="shafer")
