@@ -107,7 +107,6 @@ class EKNN:
         How the neighbours are found: a ``scipy.spatial.cKDTree`` (needs scipy), a numpy search
         over blocks of query rows, or the tree when scipy is installed.  Both give the same
         neighbours except for rows at equal distance.
-
     threads : int or None
         Threads for the distances of the default γ and for the k-d tree's queries; None for one
         per core.  The results do not depend on it.
