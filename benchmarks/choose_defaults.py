@@ -48,8 +48,8 @@ CANDIDATES: dict[str, tuple[dict, str]] = {
     "dsmc": ({"belief": {"rule": "dsmc"}}, "DSmC instead of the R-weighted rule"),
     "product": ({"fusion": "product"}, "product of the cues' likelihoods instead of a belief rule"),
     "detections cue": ({"cues": ["colour", "location", "foreground", "detections"]},
-                       "the candidates fused as a fourth cue: the detections, the person blobs without them, "
-                       "and nothing (every hypothesis alike) when born from the ground truth"),
+                       "the candidates fused as a fourth cue: the detections, or the person blobs without them "
+                       "(born from the ground truth too)"),
     "full-size mask": ({"background": {"downscale": 1}}, "the background model at full resolution"),
     "duplicates 15": ({"initiation": {"duplicate_frames": 15}}, "duplicates end after 15 frames instead of 5"),
     "overlap only": ({"initiation": {"appearance_weight": 0.0}},
