@@ -420,7 +420,9 @@ def render_page(experiment, result, summary: dict, sequences: list[str], methods
         "`illumination` (a global brightening, then a shadow) and `scale` (`scale_change`: people walking "
         "towards and away from the camera).",
         "- **Initialisation.** Every target is born at its first ground-truth box and removed after its last "
-        "(`belief track --init-from-gt`), so the scores measure the following of targets, not their detection.",
+        "(`belief track --init-from-gt`), so the scores measure the following of targets, not their detection; "
+        "the background model first learns from 50 frames, and the person blobs support and correct the tracks as "
+        "they do automatic ones (with the foreground cue: `colour only` is the particle filters alone).",
         f"- **Tracker.** N = {tracker.get('particles', 100)} particles per target; every other setting is the "
         "default of `TrackerConfig` (colour, location and foreground cues; Bel(θ_j) as the particle weight, "
         "W (32); systematic resampling every frame).",
