@@ -382,9 +382,21 @@ class MassBatch:
 
     __slots__ = ("model", "focal", "values", "_canonical", "_key", "__weakref__")
 
+    #: The class of a batch on a dask array, :class:`~belief.dask_batches.DaskMassBatch`: that module sets it when
+    #: it defines the class (``belief.rules`` imports it; the engine never imports it, nor dask).
+    lazy_type: ClassVar[type]
+
     #: The class of one row (:meth:`__getitem__`), :class:`~belief.mass.MassFunction`: :mod:`belief.mass`, which
     #: builds the mass functions on this engine, sets it when it defines them (the engine never imports them).
     row_type: ClassVar[type]
+
+    def __new__(cls, *args, **kwargs):
+        # A dask array of values gives the lazy batch of belief.dask_batches (dask is imported only then).
+        if cls is MassBatch and "dask.array" in sys.modules:
+            values = args[1] if len(args) > 1 else kwargs.get("values")
+            if isinstance(values, sys.modules["dask.array"].Array):
+                return object.__new__(_lazy_type())
+        return object.__new__(cls)
 
     def __init__(self, focal: Iterable[Query], values, frame=None, model=None, *,
                  subnormal: bool = False, validate: bool = True) -> None:
@@ -463,6 +475,8 @@ class MassBatch:
         >>> [str(x) for x in cues.focal], cues.bel("t1")
         (['t1', 't2', 'FA'], array([0.6, 0.2]))
         """
+        if "dask.array" in sys.modules and isinstance(values, sys.modules["dask.array"].Array):
+            return _lazy_type().from_bayesian(values, frame=frame, model=model, validate=validate)
         model = resolve_model(frame, model)
         focal, key, none_empty = _singleton_focal(model)
         if not none_empty:
@@ -747,6 +761,15 @@ class MassBatch:
         check_refines(self.model, model)
         return trusted_batch(model, self.focal, self.values)._regroup(
             [model.reduce(x) for x in self.focal])
+
+
+def _lazy_type() -> type:
+    lazy = getattr(MassBatch, "lazy_type", None)
+    if lazy is None:                       # belief.rules defines it on import, which ``import belief`` does
+        import importlib
+
+        lazy = importlib.import_module("belief.dask_batches").DaskMassBatch
+    return lazy
 
 
 def _dsmp_undefined(epsilon: float, element: Element) -> UndefinedTransformError:

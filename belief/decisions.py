@@ -21,6 +21,7 @@ from typing import Union
 import numpy as np
 
 from belief.batch import MassBatch
+from belief.dask_batches import DaskMassBatch, lazy_decisions
 from belief.distances import _as_batch
 from belief.errors import MeasureOptionError, UnknownMeasureError
 from belief.frame import Element
@@ -242,6 +243,10 @@ def decide(m: Union[MassFunction, MassBatch], criterion: str = "betp", candidate
             return _decisions(names, scores, tol)[0]
     batch, single = _as_batch(m, "the mass function")
     queries = _candidates(batch, candidates)
+    if isinstance(batch, DaskMassBatch):
+        frame = batch.model.frame
+        names = frame.hypotheses if queries is frame.singletons else tuple([str(q) for q in queries])
+        return lazy_decisions(_decisions, batch, key, queries, names, tol, epsilon)
     if key == "dsmp":
         scores = batch.dsmp(queries, epsilon=epsilon)
     else:

@@ -30,6 +30,7 @@ from collections.abc import Sequence
 from typing import Any, Union
 
 import belief.bayesian as bayesian
+import belief.dask_batches as dask_batches
 from belief.batch import MassBatch
 from belief.bayesian import ENGINES
 from belief.errors import BeliefError, InvalidMassError
@@ -155,6 +156,9 @@ def combine(*sources: Source, rule: Union[str, RuleInfo] = "dempster", model: Mo
     >>> combine(*cues, rule="pcr6").betp(["a", "b", "c"]).round(12)      # closed forms, same numbers
     array([[0.486, 0.486, 0.028]])
     """
+    if dask_batches.made and dask_batches.any_lazy(sources):
+        # Batches on dask arrays: this same function per chunk of rows (belief.dask_batches).
+        return dask_batches.combine_lazy(combine, sources, get_rule(rule), model, engine, options)
     key = ALIASES.get(rule) if type(rule) is str else None
     info = RULES[key] if key is not None else get_rule(rule)     # an exact name skips the normalisation
     if engine == "auto" or engine == "general":
