@@ -48,8 +48,9 @@ __all__ = ["register", "register_eval", "register_experiment", "AUTOMATIC_WARM_U
 
 #: The line printed under the scores of a run that has a ground truth.
 SCORES_EXPLAINED = ("(MOTA: 1 minus the missed people, false boxes and identity switches per ground-truth box; "
-                    "IDF1: the share of boxes on the right person with the right id; 1 is perfect for both, a box "
-                    "counts when it overlaps its person by IoU >= 0.5)")
+                    "IDF1: the share of boxes on the right person with the right id; a box counts for both when it "
+                    "overlaps its person by IoU >= 0.5; HOTA: the geometric mean of detection and association "
+                    "accuracy, averaged over IoU thresholds 0.05 to 0.95; 1 is perfect for all three)")
 
 
 def _quiet(args: argparse.Namespace) -> bool:
@@ -424,7 +425,7 @@ def _report(args: argparse.Namespace, summary) -> None:
               f"{summary.overall_fps:.1f} fps overall; outputs in {args.out}: {written}")
         if summary.scores is not None:
             s = summary.scores
-            print(f"MOTA {s.mota:.4f}  IDF1 {s.idf1:.4f}  ID switches {s.id_switches}  "
+            print(f"MOTA {s.mota:.4f}  IDF1 {s.idf1:.4f}  HOTA {s.hota:.4f}  ID switches {s.id_switches}  "
                   f"centre error mean {s.mean_centre_error:.2f} px, median {s.median_centre_error:.2f} px")
             if not _quiet(args):
                 print(SCORES_EXPLAINED)
