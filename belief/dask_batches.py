@@ -61,7 +61,8 @@ from belief.errors import InvalidMassError
 from belief.frame import Element
 from belief.model import Model
 
-__all__ = ["DaskMassBatch", "is_dask_array", "from_npy", "combine_lazy", "lazy_decisions"]
+__all__ = ["DaskMassBatch", "is_dask_array", "from_npy", "to_npy", "NpyRows", "NpyTarget", "combine_lazy",
+           "lazy_decisions"]
 
 #: Set once a :class:`DaskMassBatch` exists: until then :func:`~belief.rules.combine` does not look for one.
 made = False
@@ -110,7 +111,7 @@ def probe_row(live: np.ndarray, n: int) -> np.ndarray:
     """A made-up mass function of shape (1, K): distinct positive masses on the ``live`` columns, others for input n.
 
     >>> probe_row(np.array([False, True, True]), 0).round(3)
-    array([[0.   , 0.448, 0.552]])
+    array([[0.   , 0.567, 0.433]])
     """
     weights = 1.0 + (np.arange(len(live)) * 0.6180339887498949 + n * 0.41421356237309515) % 1.0
     weights = np.where(live, weights, 0.0) if live.any() else weights
@@ -491,6 +492,57 @@ class DaskMassBatch(MassBatch):
         return self._derive("under", model)
 
 
+class NpyRows:
+    """The rows of a ``.npy`` file, read through a memory map opened where they are read.
+
+    It pickles as its path only, so a task sent to a ``dask.distributed`` worker process
+    opens the file there (a ``np.memmap`` itself pickles as a copy of all its data).
+    """
+
+    def __init__(self, path) -> None:
+        self.path = str(path)
+        mapped = np.load(self.path, mmap_mode="r")
+        self.shape, self.dtype, self.ndim = mapped.shape, mapped.dtype, mapped.ndim
+        del mapped
+
+    def __reduce__(self):
+        return (NpyRows, (self.path,))
+
+    def __getitem__(self, index) -> np.ndarray:
+        # A map per read, closed after the copy: pages of the file read earlier do not stay in the process's memory.
+        mapped = np.load(self.path, mmap_mode="r")
+        out = np.array(mapped[index], dtype=np.float64)
+        del mapped
+        return out
+
+
+class NpyTarget:
+    """A ``.npy`` file written in place, as the target of ``dask.array.store`` (pickles as its path, as :class:`NpyRows`)."""
+
+    def __init__(self, path) -> None:
+        self.path = str(path)
+
+    def __setitem__(self, index, value) -> None:
+        mapped = np.load(self.path, mmap_mode="r+")
+        mapped[index] = value
+        mapped.flush()
+        del mapped
+
+
+def to_npy(values, path) -> None:
+    """Compute a lazy batch's values (or a dask array) chunk by chunk into a new ``.npy`` file at ``path``.
+
+    Each chunk is written where it is computed (a ``dask.distributed`` worker writes its
+    own chunks), so the result never has to fit in memory.
+    """
+    da = _dask_array()
+    if isinstance(values, DaskMassBatch):
+        values = values.values
+    header = np.lib.format.open_memmap(str(path), mode="w+", dtype=values.dtype, shape=values.shape)
+    del header
+    da.store(values, NpyTarget(path), lock=False)
+
+
 def from_npy(path, focal=None, *, rows_per_chunk: int = 1 << 20, frame=None, model=None,
              validate: bool = True) -> DaskMassBatch:
     """A lazy batch over a ``.npy`` file of shape (N, K), read as a memory map chunk by chunk.
@@ -511,8 +563,7 @@ def from_npy(path, focal=None, *, rows_per_chunk: int = 1 << 20, frame=None, mod
     DaskMassBatch
     """
     da = _dask_array()
-    mapped = np.load(path, mmap_mode="r")
-    values = da.from_array(mapped, chunks=(rows_per_chunk, -1))
+    values = da.from_array(NpyRows(path), chunks=(rows_per_chunk, -1), asarray=True)
     if focal is None:
         return DaskMassBatch.from_bayesian(values, frame=frame, model=model, validate=validate)
     return DaskMassBatch(focal, values, frame=frame, model=model, validate=validate)
