@@ -3,7 +3,8 @@
 Two sources of ``--rows`` rows over three hypotheses (the tracking model of one target and
 FA, plus a second target: t1, t2, FA) are written to ``.npy`` files, opened as memory maps,
 wrapped by ``dask.array.from_array`` and fused with ``combine(..., rule="pcr6")`` on a
-``LocalCluster`` of ``--workers`` worker processes (:func:`belief.dask_batches.from_npy`); the
+``LocalCluster`` of ``--workers`` workers, threads of this process unless ``--processes``
+(:func:`belief.dask_batches.from_npy`); the
 result is stored chunk by chunk into a ``.npy`` file made by ``np.lib.format.open_memmap``
 (:func:`belief.dask_batches.to_npy`).  Printed: the rows, the time of the fusion, the
 throughput in rows per second, that of the in-memory kernel on a batch that fits
@@ -107,10 +108,14 @@ def main(argv=None) -> int:
     parser.add_argument("--rows", type=int, default=10_000_000, help="rows of each source (default 10^7)")
     parser.add_argument("--dir", default=None, help="folder for the .npy files (default: a temporary folder)")
     parser.add_argument("--chunk", type=int, default=1 << 19, help="rows per chunk (default 2^19)")
-    parser.add_argument("--workers", type=int, default=2, help="worker processes of the LocalCluster (default 2)")
+    parser.add_argument("--workers", type=int, default=2, help="workers of the LocalCluster (default 2)")
     parser.add_argument("--memory-limit", default="700MB", help="memory limit of each worker (default 700MB)")
     parser.add_argument("--memory-rows", type=int, default=4_000_000,
                         help="rows of the in-memory reference batch (default 4 x 10^6)")
+    parser.add_argument("--processes", action="store_true",
+                        help="workers as processes of their own; by default they are threads of this process "
+                             "(LocalCluster(processes=False)), which pickle no chunk between processes while "
+                             "numpy's kernels release the GIL")
     parser.add_argument("--keep", action="store_true", help="keep the .npy files")
     args = parser.parse_args(argv)
 
@@ -136,7 +141,7 @@ def main(argv=None) -> int:
         write_source(folder / "b.npy", args.rows, 2)
         written = time.perf_counter() - start
 
-        with LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
+        with LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=args.processes,
                           memory_limit=args.memory_limit, dashboard_address=None) as cluster, \
                 Client(cluster) as client:
             client.run(lambda: __import__("belief"))          # the workers import belief once, before the clock
@@ -158,7 +163,9 @@ def main(argv=None) -> int:
         equal = bool(np.array_equal(check[:1000], head))
         del check
         rate = args.rows / elapsed
-        print(f"rows: {args.rows:,} (chunks of {args.chunk:,}, {args.workers} workers, {args.memory_limit} each)")
+        kind = "processes" if args.processes else "threads"
+        print(f"rows: {args.rows:,} (chunks of {args.chunk:,}, {args.workers} workers as {kind}, "
+              f"{args.memory_limit} each)")
         print(f"result focal elements: {focal}; first 1,000 rows equal to the in-memory path: {equal}")
         print(f"inputs written in {written:.1f} s")
         print(f"dask, memory maps -> .npy: {elapsed:.1f} s, {rate / 1e6:.2f} M rows/s")
