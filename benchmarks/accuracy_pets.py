@@ -21,9 +21,10 @@ the default.  Each run is a cell of ``belief experiment``
 ``belief_tracking.evaluation.evaluate(gt, tracks)`` (IoU >= 0.5; ground-truth rows
 with flag 0 ignored), so its figures are those of the comparison study
 (``benchmarks/comparison_study.py``) for the same configuration and seeds.  The table gives,
-per configuration, the mean over the seeds of MOTA, IDF1, the median centre error, the ID
-switches, the mean particle count per target and frame, the share of target-frames flagged
-as occluded, and the MOTA of each seed.
+per configuration, the mean over the seeds of MOTA, IDF1, HOTA with its detection and
+association parts (DetA, AssA), the median centre error, the ID switches, the mean particle
+count per target and frame, the share of target-frames flagged as occluded, and the MOTA of
+each seed.
 
 Below the table come two trackers of the field on the same detections, SORT and ByteTrack,
 with their MOTA and IDF1 as the data set's README gives them (measured there on the same
@@ -111,6 +112,7 @@ def cell(data: Path, name: str, seed: int, particles: int) -> Cell:
 def score(data: Path, name: str, seed: int, particles: int) -> dict:
     row = run_cell(cell(data, name, seed, particles))["row"]
     return {"name": name, "seed": seed, "mota": row["mota"], "idf1": row["idf1"],
+            "hota": row["hota"], "deta": row["deta"], "assa": row["assa"],
             "median_centre_error": row["median_centre_error"], "id_switches": row["id_switches"],
             "particles": row["mean_particles"], "occluded": row["occluded_share"]}
 
@@ -147,7 +149,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"no det.txt in {args.data}: skipped {', '.join(without)}")
         configs = [name for name in configs if name not in without]
     print(f"PETS09 S2.L1 f1-200, N = {args.particles}, seeds {args.seeds}")
-    print(f"{'configuration':<20} {'MOTA':>7} {'IDF1':>7} {'median px':>10} {'ID sw':>6} {'mean N':>7} "
+    print(f"{'configuration':<20} {'MOTA':>7} {'IDF1':>7} {'HOTA':>7} {'DetA':>7} {'AssA':>7} {'median px':>10} "
+          f"{'ID sw':>6} {'mean N':>7} "
           f"{'occluded':>9}   MOTA per seed")
     jobs = [(args.data, name, seed, args.particles) for name in configs for seed in args.seeds]
     results = []
@@ -158,12 +161,13 @@ def main(argv: list[str] | None = None) -> int:
     for name in configs:
         own = [r for r in results if r["name"] == name]
         mean = {key: statistics.fmean(r[key] for r in own)
-                for key in ("mota", "idf1", "median_centre_error", "id_switches", "particles")}
+                for key in ("mota", "idf1", "hota", "deta", "assa", "median_centre_error", "id_switches", "particles")}
         # The occlusion test runs only where the templates follow their targets.
         flagged = [r["occluded"] for r in own if r["occluded"] is not None]
         occluded = f"{statistics.fmean(flagged):>9.2f}" if flagged else f"{'-':>9}"
         per_seed = " ".join(f"{r['mota']:.3f}" for r in own)
-        print(f"{name:<20} {mean['mota']:>7.3f} {mean['idf1']:>7.3f} {mean['median_centre_error']:>10.2f} "
+        print(f"{name:<20} {mean['mota']:>7.3f} {mean['idf1']:>7.3f} {mean['hota']:>7.3f} {mean['deta']:>7.3f} "
+              f"{mean['assa']:>7.3f} {mean['median_centre_error']:>10.2f} "
               f"{mean['id_switches']:>6.1f} {mean['particles']:>7.1f} {occluded}   {per_seed}",
               flush=True)
         verdicts += [(name, text, ok) for text, ok in check(name, mean)]

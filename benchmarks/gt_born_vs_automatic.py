@@ -1,4 +1,4 @@
-"""GT-born against automatic tracks: MOTA and IDF1 on every built-in scene and on PETS09-S2L1 (issue 27).
+"""GT-born against automatic tracks: MOTA, IDF1 and HOTA on every built-in scene and on PETS09-S2L1 (issue 27).
 
 Run from the repository root::
 
@@ -57,7 +57,7 @@ def score(name: str, init: str, seed: int, particles: int, data: Path, rule: str
                 (("particles", particles),))
     row = run_cell(cell)["row"]
     return {"name": name, "init": init, "seed": seed, "mota": row["mota"], "idf1": row["idf1"],
-            "id_switches": row["id_switches"]}
+            "hota": row["hota"], "id_switches": row["id_switches"]}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -83,13 +83,15 @@ def main(argv: list[str] | None = None) -> int:
         results = list(pool.map(score, *zip(*jobs)))
     print(f"N = {args.particles}, fusion {args.rule or 'default'}, seeds {args.seeds} (means over the seeds)")
     print(f"{'sequence':<18} {'GT-born MOTA':>12} {'automatic MOTA':>14} {'GT-born IDF1':>12} "
-          f"{'automatic IDF1':>14} {'GT-born ID sw':>13} {'auto ID sw':>10}")
+          f"{'automatic IDF1':>14} {'GT-born HOTA':>12} {'automatic HOTA':>14} {'GT-born ID sw':>13} "
+          f"{'auto ID sw':>10}")
     below = []
     for name in names:
         mean = {(init, key): statistics.fmean(r[key] for r in results if r["name"] == name and r["init"] == init)
-                for init in INITS for key in ("mota", "idf1", "id_switches")}
+                for init in INITS for key in ("mota", "idf1", "hota", "id_switches")}
         print(f"{name:<18} {mean['gt', 'mota']:>12.3f} {mean['automatic', 'mota']:>14.3f} "
               f"{mean['gt', 'idf1']:>12.3f} {mean['automatic', 'idf1']:>14.3f} "
+              f"{mean['gt', 'hota']:>12.3f} {mean['automatic', 'hota']:>14.3f} "
               f"{mean['gt', 'id_switches']:>13.1f} {mean['automatic', 'id_switches']:>10.1f}", flush=True)
         if mean["gt", "mota"] < mean["automatic", "mota"]:
             below.append(name)
