@@ -369,19 +369,6 @@ class InitiationConfig:
         stays the overlap alone (``match_iou``).  Foreground blobs are assigned on overlap
         alone: a blob may hold several people.  The default was chosen with
         ``benchmarks/choose_defaults.py``.
-    group_ratio : float or None
-        A foreground blob that holds :data:`COVERED_FRACTION` of two tracks' boxes or more,
-        and whose area is at least this times the larger box's (default 1.3), is a group of
-        people seen as one (:func:`~belief_tracking.tracks.group_candidates`).  It supports
-        the track that takes it, but only keeps that track's box inside it: the centre moves
-        by ``centre_gain`` times the score towards the nearest place where the box fits in
-        the blob (not towards the blob's centre), and the size does not change.  The blob
-        says that someone of the group is there, not where this track's person is: pulled
-        to the group's centre and grown to its size, the track would leave with whichever
-        person comes out of the group on its side.  A blob about one box's size is one
-        person (or two almost wholly one behind the other) and moves the track as any
-        other.  None: every blob moves and resizes the track that takes it.  Detections
-        are one person each and are never groups.
     births : bool
         Whether tracks start and end on their own (default True).  False: every birth and
         death comes from the init plan.  The candidates still support and correct the
@@ -430,7 +417,6 @@ class InitiationConfig:
     max_aspect: float = 0.5
     centre_gain: float = 0.5
     appearance_weight: float = 0.75
-    group_ratio: float | None = 1.3
     births: bool = True
 
     def __post_init__(self) -> None:
@@ -465,9 +451,6 @@ class InitiationConfig:
         object.__setattr__(self, "centre_gain", _fraction("centre_gain", self.centre_gain, allow_zero=True))
         object.__setattr__(self, "appearance_weight", checks.number("InitiationConfig.appearance_weight",
                                                                     self.appearance_weight, minimum=0.0))
-        if self.group_ratio is not None:
-            object.__setattr__(self, "group_ratio", checks.number("InitiationConfig.group_ratio", self.group_ratio,
-                                                                  positive=True))
         object.__setattr__(self, "births", checks.flag("InitiationConfig.births", self.births))
 
     def min_area_pixels(self, image_shape: tuple[int, int]) -> float:

@@ -23,11 +23,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .association import UNASSIGNED
-from .boxes import check_boxes, intersections
+from .boxes import check_boxes
 from .config import TrackerConfig
 from .cues.histograms import bhattacharyya
 from .errors import InitError
-from .initiation import COVERED_FRACTION, InitPlan, TargetInit
+from .initiation import InitPlan, TargetInit
 from .lifecycle import Lifecycle
 from .observe import FrameView
 from .particles import CX, CY, ParticleSet, initialise
@@ -67,67 +67,6 @@ class Estimate:
     def of(cls, track: Track, frame: int) -> Estimate:
         """The estimate of ``track`` at ``frame``: its state and window now."""
         return cls(frame, track.id, track.estimate.copy(), track.box())
-
-
-def group_candidates(boxes: np.ndarray, candidates: np.ndarray, ratio: float | None) -> np.ndarray:
-    """Which candidates are groups: they hold two track boxes or more, and are ``ratio`` times the larger box.
-
-    A candidate holds a box if they share :data:`~belief_tracking.initiation.COVERED_FRACTION`
-    of the box's area; its area must be at least ``ratio`` times that of the largest box it
-    holds (:attr:`~belief_tracking.initiation.InitiationConfig.group_ratio`).
-
-    Parameters
-    ----------
-    boxes : ndarray, shape (τ, 4)
-        The tracks' boxes ``x, y, w, h``.
-    candidates : ndarray, shape (n, 4) or (n, 5)
-        The candidate boxes (a score column is ignored).
-    ratio : float or None
-        None: no candidate is a group.
-
-    Returns
-    -------
-    ndarray of bool, shape (n,)
-
-    Examples
-    --------
-    Two people side by side seen as one blob, a third alone, and two almost wholly one
-    behind the other (a blob the size of one person):
-
-    >>> boxes = np.array([[0.0, 0, 10, 20], [8, 0, 10, 20], [50, 0, 10, 20], [100, 0, 10, 20], [101, 0, 10, 20]])
-    >>> blobs = np.array([[0.0, 0, 18, 20, 1], [50, 0, 10, 20, 1], [100, 0, 11, 20, 1]])
-    >>> group_candidates(boxes, blobs, 1.3).tolist()
-    [True, False, False]
-    >>> group_candidates(boxes, blobs, None).tolist()
-    [False, False, False]
-    """
-    candidates = np.asarray(candidates, dtype=np.float64)
-    candidates = candidates[:, :4] if candidates.ndim == 2 else candidates.reshape(-1, 4)
-    boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-    if ratio is None or len(boxes) < 2 or not len(candidates):
-        return np.zeros(len(candidates), dtype=bool)
-    areas = boxes[:, 2] * boxes[:, 3]
-    inside = intersections(boxes, candidates) >= COVERED_FRACTION * areas[:, None]
-    largest = np.where(inside, areas[:, None], 0.0).max(axis=0)
-    return (inside.sum(axis=0) >= 2) & (candidates[:, 2] * candidates[:, 3] >= ratio * largest)
-
-
-def inside_centre(centre: np.ndarray, size: np.ndarray, box: np.ndarray) -> np.ndarray:
-    """The centre nearest ``centre`` at which a box of ``size`` lies inside ``box`` (``x, y, w, h``).
-
-    Along an axis where the box is larger than ``box``, the centre of ``box``.
-
-    Examples
-    --------
-    >>> inside_centre(np.array([0.0, 10]), np.array([10.0, 20]), np.array([0.0, 0, 30, 20])).tolist()
-    [5.0, 10.0]
-    >>> inside_centre(np.array([12.0, 30]), np.array([10.0, 40]), np.array([0.0, 0, 30, 20])).tolist()
-    [12.0, 10.0]
-    """
-    x, y, w, h = np.asarray(box, dtype=np.float64)[:4]
-    half = np.asarray(size, dtype=np.float64) / 2.0
-    low, high = np.array([x, y]) + half, np.array([x + w, y + h]) - half
-    return np.where(low <= high, np.clip(centre, low, np.maximum(low, high)), np.array([x + w / 2.0, y + h / 2.0]))
 
 
 class TrackManager:
@@ -327,34 +266,16 @@ class TrackManager:
         A track's window is its base size times exp(log_scale), the scale the perspective
         model gives its row: the candidate is the whole window, so the base size moves
         towards the candidate's size divided by that scale, or the scale would count twice.
-
-        A foreground blob that is a group (:func:`group_candidates`,
-        :attr:`~belief_tracking.initiation.InitiationConfig.group_ratio`) leaves the size as it
-        is, and moves the centre only towards the nearest place where the track's box lies
-        inside the blob: it says that someone of the group is there, not where this track's
-        person is.
         """
         initiation = self.config.initiation
         if initiation is None:
             return
         rate, gain = initiation.size_smoothing, initiation.centre_gain
-        groups = np.zeros(len(candidates), dtype=bool)
-        if not detector and (np.asarray(assigned) >= 0).any():
-            groups = group_candidates(np.array([track.box() for track in tracks]).reshape(-1, 4), candidates,
-                                      initiation.group_ratio)
         for track, k in zip(tracks, assigned):
             if k < 0:
                 continue
             x, y, w, h, score = candidates[k]
             track.last_seen = (frame, np.array([x, y, w, h]))
-            if groups[k]:
-                if gain > 0:
-                    centre = track.estimate[[CX, CY]]
-                    shift = np.zeros(track.particles.states.shape[1])
-                    shift[[CX, CY]] = gain * score * (inside_centre(centre, track.box()[2:], candidates[k]) - centre)
-                    track.particles = ParticleSet(track.particles.states + shift, track.particles.log_weights)
-                    track.estimate = track.estimate + shift
-                continue
             width = min(w, initiation.max_aspect * h) if detector else w
             step = initiation.detection_size_smoothing if detector else rate
             track.size = (1.0 - step) * track.size + step * np.array([width, h]) / track.scale()
