@@ -281,10 +281,25 @@ def exact_sum(values) -> float:
         return math.inf
 
 
+#: Below this many focal elements a row's sum is added column by column: numpy adds fewer than eight numbers in
+#: order, so the bits are those of ``values.sum(axis=1)``, which spends ten times longer on rows this short.
+COLUMN_SUM_WIDTH = 8
+
+
 def _row_sums(values: np.ndarray) -> np.ndarray:
+    """The sum of each row of ``values`` (N, K), shape (N,): exact for a few rows, numpy's sum otherwise.
+
+    >>> _row_sums(np.full((100, 3), 0.1))[:2]
+    array([0.3, 0.3])
+    """
     if values.shape[1] <= 64 and values.shape[0] <= 64:
         return np.array([exact_sum(row) for row in values.tolist()], dtype=np.float64)
-    with np.errstate(over="ignore"):                   # a sum past the float range is inf, and refused
+    with np.errstate(over="ignore", invalid="ignore"):  # a sum past the float range is inf, and refused
+        if values.shape[1] < COLUMN_SUM_WIDTH:
+            totals = values[:, 0].copy()
+            for column in range(1, values.shape[1]):
+                totals += values[:, column]
+            return totals
         return values.sum(axis=1)
 
 
