@@ -23,13 +23,13 @@ import numpy as np
 from collections.abc import Sequence
 
 from . import checks
-from .boxes import check_boxes, iou
+from .boxes import check_boxes, intersections, iou
 from .cues import Observation, template_similarity
 from .errors import TrackingError
-from .initiation import InitiationConfig
+from .initiation import COVERED_FRACTION, InitiationConfig
 from .particles import CX, CY, STATE_DIM
 
-__all__ = ["assign", "contested_pairs", "min_cost_assignment", "UNASSIGNED", "Association"]
+__all__ = ["assign", "contested_pairs", "min_cost_assignment", "take_covering", "UNASSIGNED", "Association"]
 
 #: The assignment of a track that takes no candidate.
 UNASSIGNED = -1
@@ -266,6 +266,8 @@ class Association:
         self.gate = initiation.match_iou if initiation is not None else 0.3
         self.weight = initiation.appearance_weight if initiation is not None else 0.0
         self.appearance_cues = list(appearance_cues)
+        # Where the plan gives every birth (births=False), every person is a planned track's.
+        self.planned_only = initiation is not None and not initiation.births
 
     def __call__(self, obs: Observation, predicted: np.ndarray, candidates: np.ndarray | None,
                  detector: bool) -> np.ndarray | None:
@@ -284,6 +286,11 @@ class Association:
         """
         if candidates is None:
             return None
+        assigned = self._matched(obs, predicted, candidates, detector)
+        return take_covering(predicted, candidates, assigned) if self.planned_only else assigned
+
+    def _matched(self, obs: Observation, predicted: np.ndarray, candidates: np.ndarray, detector: bool) -> np.ndarray:
+        """:func:`assign` by overlap, and for contested detections by appearance too."""
         if not (detector and self.weight > 0 and self.appearance_cues and len(candidates)):
             return assign(predicted, candidates, self.gate)
         rows, cols = contested_pairs(predicted, candidates, self.gate)
@@ -295,3 +302,36 @@ class Association:
         likeness = np.zeros((len(predicted), len(candidates)))
         likeness[rows, cols] = np.clip(template_similarity(self.appearance_cues, obs, states, rows), 0.0, 1.0)
         return assign(predicted, candidates, self.gate, likeness, self.weight)
+
+
+def take_covering(predicted: np.ndarray, candidates: np.ndarray, assigned: np.ndarray) -> np.ndarray:
+    """Where the plan knows every person: a free candidate that holds one track's box alone goes to that track.
+
+    The overlap gate of the assignment keeps a track far smaller than its person (born at the
+    image border, where the first box is a sliver of the person coming in) from every
+    candidate of that person.  A candidate that no track took and that holds at least
+    :data:`~belief_tracking.initiation.COVERED_FRACTION` of one unassigned track's box, and
+    that much of no other track's box, is that track's person (a candidate holding two
+    tracks' boxes may be a group, and goes to neither).
+
+    Shapes: ``predicted`` (τ, 4), ``candidates`` (n, 5), ``assigned`` and the result (τ,).
+
+    Examples
+    --------
+    >>> predicted = np.array([[0.0, 0, 4, 10], [50.0, 0, 10, 20]])    # a sliver of a person entering at x = 0
+    >>> candidates = np.array([[0.0, 0, 12, 30, 1], [50.0, 0, 10, 20, 1]])
+    >>> take_covering(predicted, candidates, np.array([-1, 1])).tolist()
+    [0, 1]
+    """
+    if not len(candidates) or (assigned != UNASSIGNED).all():
+        return assigned
+    boxes = np.asarray(candidates, dtype=np.float64)[:, :4]
+    inside = intersections(predicted, boxes) >= COVERED_FRACTION * (predicted[:, 2] * predicted[:, 3])[:, None]
+    free = np.ones(len(boxes), dtype=bool)
+    free[assigned[assigned != UNASSIGNED]] = False
+    assigned = assigned.copy()
+    for k in np.flatnonzero(free & (inside.sum(axis=0) == 1)):
+        track = int(np.flatnonzero(inside[:, k])[0])
+        if assigned[track] == UNASSIGNED:
+            assigned[track] = k
+    return assigned

@@ -54,8 +54,7 @@ from .diagnostics import DiagnosticsCollector, FrameDiagnostics, diagnostic_colu
 from .errors import InitError, TrackingError
 from .evidence import Evidence
 from .filtering import ParticleCount, Prediction, estimate, location_centres, resample
-from .boxes import intersections
-from .initiation import COVERED_FRACTION, InitPlan
+from .initiation import InitPlan
 from .observe import FrameObserver, FrameView
 from .particles import CX, CY, ParticleSet
 from .store import Track, TrackStore
@@ -253,10 +252,7 @@ class Tracker:
     def _associate(self, obs: Observation, view: FrameView, tracks: Sequence[Track]) -> np.ndarray | None:
         """Stage 3: the candidate each track takes (−1: none); None without candidates."""
         predicted = np.array([t.predicted_box(self.config.motion.dt) for t in tracks])
-        assigned = self.associate(obs, predicted, view.candidates, view.detector)
-        if assigned is None or self.config.initiation is None or self.config.initiation.births:
-            return assigned
-        return _take_covering(predicted, view.candidates, assigned)
+        return self.associate(obs, predicted, view.candidates, view.detector)
 
     def _score(self, obs: Observation, moved: Sequence[ParticleSet], tracks: Sequence[Track],
                assigned: np.ndarray | None) -> Evidence:
@@ -304,30 +300,6 @@ class Tracker:
             current = obs.with_templates(stacked_templates(tracks, self.appearance_cues)) if updated else obs
             likeness[needed] = template_similarity(self.appearance_cues, current, states, needed)
         return likeness
-
-
-def _take_covering(predicted: np.ndarray, candidates: np.ndarray, assigned: np.ndarray) -> np.ndarray:
-    """Where the plan knows every person: a free candidate that holds one track's box alone goes to that track.
-
-    The overlap gate of the assignment keeps a track far smaller than its person (born at the
-    image border, where the first box is a sliver of the person coming in) from every
-    candidate of that person.  A candidate that no track took and that holds at least
-    :data:`~belief_tracking.initiation.COVERED_FRACTION` of one unassigned track's box, and
-    that much of no other track's box, is that track's person (a candidate holding two
-    tracks' boxes may be a group, and goes to neither).
-    """
-    if not len(candidates) or (assigned != UNASSIGNED).all():
-        return assigned
-    boxes = np.asarray(candidates, dtype=np.float64)[:, :4]
-    inside = intersections(predicted, boxes) >= COVERED_FRACTION * (predicted[:, 2] * predicted[:, 3])[:, None]
-    free = np.ones(len(boxes), dtype=bool)
-    free[assigned[assigned != UNASSIGNED]] = False
-    assigned = assigned.copy()
-    for k in np.flatnonzero(free & (inside.sum(axis=0) == 1)):
-        track = int(np.flatnonzero(inside[:, k])[0])
-        if assigned[track] == UNASSIGNED:
-            assigned[track] = k
-    return assigned
 
 
 def _check_arguments(config: TrackerConfig, init: InitPlan | None, rng: np.random.Generator) -> None:

@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from belief_tracking.association import UNASSIGNED, assign, contested_pairs, min_cost_assignment
+from belief_tracking.association import UNASSIGNED, Association, assign, contested_pairs, min_cost_assignment
+from belief_tracking.initiation import InitiationConfig
 from belief_tracking.boxes import iou
 
 
@@ -152,3 +153,22 @@ def test_the_solver_takes_negative_costs_and_gives_empty_pairs_for_an_empty_side
     for shape in ((0, 3), (3, 0), (0, 0)):
         rows, cols = min_cost_assignment(np.zeros(shape))
         assert rows.shape == cols.shape == (0,) and rows.dtype == np.intp
+
+
+def test_following_a_plan_a_free_candidate_goes_to_the_one_track_it_covers_and_a_group_to_neither():
+    from belief_tracking.association import take_covering
+
+    predicted = np.array([[0.0, 0, 4, 10], [40.0, 0, 10, 20], [44.0, 0, 10, 20]])
+    # Candidate 0 covers the sliver of track 0 alone; candidate 1 covers tracks 1 and 2 (a group).
+    candidates = np.array([[0.0, 0, 12, 30, 1], [38.0, 0, 20, 24, 1]])
+    assert take_covering(predicted, candidates, np.array([-1, -1, -1])).tolist() == [0, -1, -1]
+    # A candidate that a track took already is not given again.
+    assert take_covering(predicted, candidates, np.array([-1, 0, -1])).tolist() == [-1, 0, -1]
+    # Through the association stage: only where the plan gives every birth.
+    obs = None
+    follow = Association(InitiationConfig(births=False), [])
+    automatic = Association(InitiationConfig(), [])
+    far = np.array([[0.0, 0, 4, 10]])
+    person = np.array([[0.0, 0, 12, 30, 1]])
+    assert follow(obs, far, person, detector=False).tolist() == [0]
+    assert automatic(obs, far, person, detector=False).tolist() == [-1]
