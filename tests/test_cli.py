@@ -193,19 +193,28 @@ def test_demo_runs(capsys):
     assert "Peter ∪ Paul" in out and "Peter|Paul" not in out and "a&b" not in out and "a∩b" in out
 
 
-def test_plugin_entry_points_are_registered(monkeypatch, capsys):
+class HelloPlugin:
+    """An entry point of the group ``belief.commands`` that adds ``belief hello``."""
+
+    name = "hello"
+    value = "hello_plugin:register"
+
+    @staticmethod
+    def load():
+        def register(sub):
+            p = sub.add_parser("hello")
+            p.set_defaults(func=lambda args: print("hello from a plugin") or 0)
+        return register
+
+
+def listing(*plugins):
     import belief.cli as cli
 
-    class FakeEntryPoint:
-        name = "fake"
-        value = "fake_plugin:register"
+    return lambda group: list(plugins) if group == cli.ENTRY_POINT_GROUP else []
 
-        @staticmethod
-        def load():
-            def register(sub):
-                p = sub.add_parser("hello")
-                p.set_defaults(func=lambda args: print("hello from a plugin") or 0)
-            return register
+
+def test_plugin_entry_points_are_registered(monkeypatch, capsys):
+    import belief.cli as cli
 
     class Broken:
         name = "broken"
@@ -215,7 +224,7 @@ def test_plugin_entry_points_are_registered(monkeypatch, capsys):
         def load():
             raise ImportError("missing dependency")
 
-    monkeypatch.setattr(cli, "entry_points", lambda group: [FakeEntryPoint, Broken] if group == cli.ENTRY_POINT_GROUP else [])
+    monkeypatch.setattr(cli, "entry_points", listing(HelloPlugin, Broken))
     code, out, err = run(capsys, "hello")
     assert code == 0 and out.strip() == "hello from a plugin"
     assert "plugin 'broken' could not be loaded" in err
@@ -225,21 +234,10 @@ def test_a_plugin_listed_by_two_distributions_is_registered_once(monkeypatch, ca
     # An environment that still holds the project under an earlier distribution name lists each entry point twice.
     import belief.cli as cli
 
-    class OldName:
-        name = "hello"
-        value = "hello_plugin:register"
-
-        @staticmethod
-        def load():
-            def register(sub):
-                p = sub.add_parser("hello")
-                p.set_defaults(func=lambda args: print("hello from a plugin") or 0)
-            return register
-
-    class NewName(OldName):
+    class SameUnderTheNewName(HelloPlugin):
         pass
 
-    monkeypatch.setattr(cli, "entry_points", lambda group: [OldName, NewName] if group == cli.ENTRY_POINT_GROUP else [])
+    monkeypatch.setattr(cli, "entry_points", listing(HelloPlugin, SameUnderTheNewName))
     code, out, err = run(capsys, "hello")
     assert code == 0 and out.strip() == "hello from a plugin"
     assert err == ""
